@@ -1,0 +1,1 @@
+//! Native part files (placeholder until the builder lands).

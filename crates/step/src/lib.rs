@@ -1,0 +1,1 @@
+//! STEP reader (placeholder until the reader lands).
