@@ -1,1 +1,10 @@
-//! Plan model.
+//! The plan: one serialisable value shared by every stage, the CLI and the GUI.
+//!
+//! Stages are functions of the plan so far plus knowledge; this crate knows
+//! nothing about how stages compute, only what they produce.
+
+pub mod io;
+pub mod model;
+
+pub use io::{load, save, PlanIoError};
+pub use model::*;

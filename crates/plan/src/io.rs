@@ -1,0 +1,138 @@
+//! Saving and loading plan files: atomic writes, versioned reads.
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use crate::model::{Plan, SCHEMA_VERSION};
+
+#[derive(Debug, thiserror::Error)]
+pub enum PlanIoError {
+    #[error("{path}: cannot read plan file: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: cannot write plan file: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}:{column}: not a valid plan file: {reason}")]
+    Corrupt {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        reason: String,
+    },
+    #[error("{path}: plan schema version {found} was written by a newer thinplan (this one reads up to {supported})")]
+    TooNew {
+        path: PathBuf,
+        found: u64,
+        supported: u32,
+    },
+    #[error("{path}: plan file has no `schema_version` field")]
+    NoVersion { path: PathBuf },
+}
+
+/// Serialises a plan to its canonical bytes (pretty JSON, fields in
+/// declaration order, maps ordered): the same plan always gives the same bytes.
+pub fn to_bytes(plan: &Plan) -> Vec<u8> {
+    let mut out = serde_json::to_vec_pretty(plan).expect("plan serialises");
+    out.push(b'\n');
+    out
+}
+
+/// Writes the plan atomically: to a temporary file in the same directory,
+/// flushed to disk, then renamed over the target. A crash mid-write leaves
+/// the previous file intact.
+pub fn save(plan: &Plan, path: &Path) -> Result<(), PlanIoError> {
+    write_atomic(path, &to_bytes(plan))
+}
+
+/// Atomic write of arbitrary bytes (used for plans and other outputs).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlanIoError> {
+    let err = |source| PlanIoError::Write {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "plan".into());
+    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    let result = (|| {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        drop(f);
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result.map_err(err)
+}
+
+/// Reads a plan file of this or any older schema version.
+pub fn load(path: &Path) -> Result<Plan, PlanIoError> {
+    let bytes = fs::read(path).map_err(|source| PlanIoError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    from_bytes(&bytes, path)
+}
+
+/// Parses plan bytes; `path` is only used in error messages.
+pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Plan, PlanIoError> {
+    let corrupt = |e: serde_json::Error| PlanIoError::Corrupt {
+        path: path.to_path_buf(),
+        line: e.line(),
+        column: e.column(),
+        reason: e.to_string(),
+    };
+    let mut value: Value = serde_json::from_slice(bytes).map_err(corrupt)?;
+    let version = value
+        .get("schema_version")
+        .and_then(Value::as_u64)
+        .ok_or_else(|| PlanIoError::NoVersion {
+            path: path.to_path_buf(),
+        })?;
+    if version > SCHEMA_VERSION as u64 {
+        return Err(PlanIoError::TooNew {
+            path: path.to_path_buf(),
+            found: version,
+            supported: SCHEMA_VERSION,
+        });
+    }
+    migrate(&mut value, version);
+    // Re-serialise the migrated value so that errors point into the canonical
+    // form when migration happened, and into the file itself when it did not.
+    if version == SCHEMA_VERSION as u64 {
+        serde_json::from_slice(bytes).map_err(corrupt)
+    } else {
+        serde_json::from_value(value).map_err(corrupt)
+    }
+}
+
+/// Upgrades a plan value from `from` to [`SCHEMA_VERSION`], one version at a
+/// time. Each step is a pure function of the JSON value; every version ever
+/// released keeps a frozen fixture under `crates/plan/tests/fixtures/` that
+/// must keep loading.
+pub fn migrate(value: &mut Value, from: u64) {
+    let mut v = from;
+    while v < SCHEMA_VERSION as u64 {
+        // No released version precedes 1 yet; future steps go here, e.g.
+        // 1 => migrate_1_to_2(value),
+        v += 1;
+    }
+    if let Some(obj) = value.as_object_mut() {
+        obj.insert("schema_version".into(), Value::from(SCHEMA_VERSION));
+    }
+}

@@ -1,0 +1,439 @@
+//! The plan data model: one serialisable value that every stage reads and extends.
+//!
+//! Ids are small integers assigned in a deterministic order by the stage that
+//! creates the entity; collections are `Vec`s in id order or `BTreeMap`s, so
+//! the serialised plan is byte-for-byte reproducible.
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// The schema version this build writes. Older versions are migrated on load
+/// (see [`crate::io::migrate`]).
+pub const SCHEMA_VERSION: u32 = 1;
+
+macro_rules! id_type {
+    ($(#[$m:meta])* $name:ident, $prefix:literal) => {
+        $(#[$m])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+        #[serde(transparent)]
+        pub struct $name(pub u32);
+
+        impl std::fmt::Display for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, concat!($prefix, "{}"), self.0)
+            }
+        }
+    };
+}
+
+id_type!(
+    /// A stiffness feature (wall, hole, cut-out, chamfer …).
+    StiffnessFeatureId,
+    "SF"
+);
+id_type!(
+    /// A machining feature (a removal volume owned by a stiffness feature).
+    MachiningFeatureId,
+    "MF"
+);
+id_type!(
+    /// An operation (a tool path with its tool and conditions).
+    OperationId,
+    "OP"
+);
+
+/// The whole plan.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plan {
+    pub schema_version: u32,
+    pub part: PartRef,
+    pub setup: Setup,
+    /// Which stages have run, in pipeline order; a later stage's output is
+    /// valid only if every earlier stage is listed.
+    pub stages_done: Vec<Stage>,
+    pub stiffness_features: Vec<StiffnessFeature>,
+    pub connections: Vec<Connection>,
+    pub stiffness_constraints: Vec<Constraint<StiffnessFeatureId>>,
+    pub machining_features: Vec<MachiningFeature>,
+    pub machining_constraints: Vec<Constraint<MachiningFeatureId>>,
+    pub operations: Vec<Operation>,
+    /// Final operation order (ids into `operations`).
+    pub operation_order: Vec<OperationId>,
+    /// Decisions that were considered and refused (e.g. a sequencing rule
+    /// that would have created a cycle), so a planner can ask why not.
+    pub refusals: Vec<Refusal>,
+    /// Free-form metadata (knowledge version, tool versions …), ordered.
+    pub notes: BTreeMap<String, String>,
+}
+
+/// The pipeline stages, in order (DESIGN.md, "The pipeline").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stage {
+    Import,
+    Setup,
+    Recognise,
+    Connect,
+    Sequence,
+    Determine,
+    Resolve,
+    Operations,
+    Order,
+    Output,
+}
+
+impl Stage {
+    pub const ALL: [Stage; 10] = [
+        Stage::Import,
+        Stage::Setup,
+        Stage::Recognise,
+        Stage::Connect,
+        Stage::Sequence,
+        Stage::Determine,
+        Stage::Resolve,
+        Stage::Operations,
+        Stage::Order,
+        Stage::Output,
+    ];
+}
+
+/// Where the part came from, with a content hash so a plan can tell when
+/// its part file has changed underneath it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartRef {
+    /// Path as given by the user (or `builtin:NAME` for a bundled sample).
+    pub source: String,
+    pub format: PartFormat,
+    /// SHA-256 of the file bytes, lower-case hex.
+    pub sha256: String,
+    /// Length unit declared by the file; geometry is always in mm.
+    pub declared_units: String,
+    pub summary: PartSummary,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PartFormat {
+    Step,
+    Native,
+}
+
+/// Facts about the imported B-rep, recorded so a plan can be checked
+/// against its part without re-reading it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartSummary {
+    pub solids: usize,
+    pub faces: usize,
+    /// Axis-aligned extent in mm.
+    pub bbox: [f64; 3],
+    /// mm³
+    pub volume: f64,
+}
+
+/// The part's placement on the machine and the resources used.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Setup {
+    /// The spindle axis (tool pointing down it) in part coordinates:
+    /// what is "up" for this set-up.
+    pub up: DVec3,
+    pub machine: String,
+    pub tool_set: String,
+    pub material: String,
+    pub provenance: Provenance,
+}
+
+/// Why an entity exists: the rule or knowledge block that made it, with
+/// the values it used; `User` for manual edits.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Provenance {
+    pub source: ProvenanceSource,
+    /// Rule, block or recogniser id, e.g. `sequencing.flange_before_wall`.
+    pub rule: String,
+    /// The values the decision used, by name, ordered.
+    pub values: BTreeMap<String, f64>,
+    pub note: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProvenanceSource {
+    Default,
+    Import,
+    Recogniser,
+    Knowledge,
+    User,
+}
+
+impl Provenance {
+    pub fn new(source: ProvenanceSource, rule: impl Into<String>) -> Self {
+        Provenance {
+            source,
+            rule: rule.into(),
+            values: BTreeMap::new(),
+            note: String::new(),
+        }
+    }
+
+    pub fn with_value(mut self, name: impl Into<String>, value: f64) -> Self {
+        self.values.insert(name.into(), value);
+        self
+    }
+}
+
+/// A 2D segment of a profile: straight, or a true arc given by its bulge
+/// (tan of a quarter of the swept angle; positive = counter-clockwise),
+/// the convention of cavalier_contours and DXF.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProfileVertex {
+    pub x: f64,
+    pub y: f64,
+    /// 0 for a straight segment to the next vertex.
+    pub bulge: f64,
+}
+
+/// A closed loop of profile vertices (implicitly closed).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProfileLoop {
+    pub vertices: Vec<ProfileVertex>,
+}
+
+/// A planar region: one outer loop (counter-clockwise) and holes (clockwise).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Region {
+    pub outer: ProfileLoop,
+    pub holes: Vec<ProfileLoop>,
+}
+
+/// A frame given by origin, x direction and z direction (the sweep / tool-access
+/// axis); y = z × x.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrismFrame {
+    pub origin: DVec3,
+    pub x: DVec3,
+    pub z: DVec3,
+}
+
+/// The one shape representation of features (DESIGN.md, "Representation"):
+/// a planar region in a frame, swept along the frame's z over `[z_min, z_max]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Prism {
+    pub frame: PrismFrame,
+    pub region: Region,
+    pub z_min: f64,
+    pub z_max: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StiffnessKind {
+    Wall,
+    Hole,
+    Cutout,
+    Slot,
+    Notch,
+    Pocket,
+    Step,
+    Chamfer,
+    Fillet,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WallRole {
+    Web,
+    Rib,
+    Flange,
+}
+
+/// A stiffness feature: an element of the part's stiffness (wall) or
+/// something that weakens or shapes it (depression, detail).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StiffnessFeature {
+    pub id: StiffnessFeatureId,
+    pub kind: StiffnessKind,
+    pub role: Option<WallRole>,
+    /// Part faces that make up the feature.
+    pub faces: Vec<usize>,
+    /// Wall normal or depression axis, in part coordinates.
+    pub axis: DVec3,
+    pub thickness: Option<f64>,
+    pub height: f64,
+    pub length: f64,
+    pub diameter: Option<f64>,
+    pub shape: Option<Prism>,
+    /// Tool-access directions the machine can reach for this feature.
+    pub access: Vec<DVec3>,
+    pub provenance: Provenance,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConnectionKind {
+    BaseLeaf,
+    Crossing,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Connection {
+    pub base: StiffnessFeatureId,
+    pub leaf: StiffnessFeatureId,
+    pub kind: ConnectionKind,
+    pub provenance: Provenance,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ConstraintKind {
+    /// `first` is machined before `second`.
+    Before,
+    /// `first` and `second` are machined together (interleaved).
+    Simultaneous,
+}
+
+/// A sequence constraint between two features of the same level.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Constraint<Id> {
+    pub first: Id,
+    pub second: Id,
+    pub kind: ConstraintKind,
+    pub priority: i32,
+    pub provenance: Provenance,
+}
+
+/// What a face of a machining feature borders (DESIGN.md stage 6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Adjacency {
+    Product,
+    Open,
+    Feature,
+}
+
+/// A removal volume owned by a stiffness feature.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachiningFeature {
+    pub id: MachiningFeatureId,
+    pub owner: StiffnessFeatureId,
+    pub shape: Prism,
+    /// Adjacency per profile edge of the outer loop, then the bottom.
+    pub side_adjacency: Vec<Adjacency>,
+    pub bottom_adjacency: Adjacency,
+    pub provenance: Provenance,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Region3 {
+    Boundary,
+    FullCut,
+    Rest,
+    Rapid,
+    Link,
+}
+
+/// One move of a tool path: straight or a circular arc about `centre`
+/// (in the plane normal to `axis`), with its feed in mm/min (0 for rapids).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathMove {
+    pub to: DVec3,
+    pub arc: Option<ArcMove>,
+    pub feed: f64,
+    pub region: Region3,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArcMove {
+    pub centre: DVec3,
+    pub axis: DVec3,
+    pub clockwise: bool,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Operation {
+    pub id: OperationId,
+    pub feature: MachiningFeatureId,
+    pub method: String,
+    pub tool: String,
+    /// Tool axis (pointing from tip to spindle) in part coordinates.
+    pub tool_axis: DVec3,
+    pub spindle_rpm: f64,
+    pub start: DVec3,
+    pub moves: Vec<PathMove>,
+    pub provenance: Provenance,
+}
+
+/// A decision the planner considered and did not take.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Refusal {
+    pub stage: Stage,
+    pub rule: String,
+    pub reason: String,
+    pub provenance: Provenance,
+}
+
+impl Plan {
+    /// A new plan for an imported part with a default set-up; nothing else run.
+    pub fn new(part: PartRef, setup: Setup) -> Self {
+        Plan {
+            schema_version: SCHEMA_VERSION,
+            part,
+            setup,
+            stages_done: vec![Stage::Import, Stage::Setup],
+            stiffness_features: Vec::new(),
+            connections: Vec::new(),
+            stiffness_constraints: Vec::new(),
+            machining_features: Vec::new(),
+            machining_constraints: Vec::new(),
+            operations: Vec::new(),
+            operation_order: Vec::new(),
+            refusals: Vec::new(),
+            notes: BTreeMap::new(),
+        }
+    }
+
+    /// Drops the results of `stage` and every stage after it, so that an
+    /// edit upstream never leaves stale downstream results behind.
+    pub fn invalidate_from(&mut self, stage: Stage) {
+        self.stages_done.retain(|s| *s < stage);
+        if stage <= Stage::Recognise {
+            self.stiffness_features.clear();
+        }
+        if stage <= Stage::Connect {
+            self.connections.clear();
+        }
+        if stage <= Stage::Sequence {
+            self.stiffness_constraints.clear();
+        }
+        if stage <= Stage::Determine {
+            self.machining_features.clear();
+            self.machining_constraints.clear();
+        }
+        if stage <= Stage::Operations {
+            self.operations.clear();
+        }
+        if stage <= Stage::Order {
+            self.operation_order.clear();
+        }
+        self.refusals.retain(|r| r.stage < stage);
+    }
+}
