@@ -1,0 +1,295 @@
+//! The company's manufacturing knowledge as typed data.
+//!
+//! Knowledge lives in RON files under a knowledge directory (by default the
+//! repository's `knowledge/`, also embedded in the binary). Everything is
+//! loaded and validated before planning; every problem found is reported
+//! with file, line and column, as many as can be found in one run.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+pub mod load;
+pub mod resources;
+
+pub use load::{load_ron, parse_ron, KnowledgeError};
+pub use resources::*;
+
+/// All knowledge a plan uses, by id (ordered maps: deterministic).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Knowledge {
+    /// Where it was read from (`builtin:` for the embedded copy).
+    pub origin: String,
+    pub machines: BTreeMap<String, Machine>,
+    pub tool_sets: BTreeMap<String, ToolSet>,
+    pub materials: BTreeMap<String, Material>,
+}
+
+/// The embedded copy of the repository's `knowledge/` directory:
+/// `(relative path, text)`.
+const BUILTIN: &[(&str, &str)] = &[
+    (
+        "machines/hsm_5axis.ron",
+        include_str!("../../../knowledge/machines/hsm_5axis.ron"),
+    ),
+    (
+        "tools/endmills_12_20.ron",
+        include_str!("../../../knowledge/tools/endmills_12_20.ron"),
+    ),
+    (
+        "materials/al7075.ron",
+        include_str!("../../../knowledge/materials/al7075.ron"),
+    ),
+];
+
+/// Default resources when a set-up names none.
+pub const DEFAULT_MACHINE: &str = "hsm_5axis";
+pub const DEFAULT_TOOL_SET: &str = "endmills_12_20";
+pub const DEFAULT_MATERIAL: &str = "al7075";
+
+#[derive(Default)]
+struct Collector {
+    k: Option<Knowledge>,
+    errors: Vec<KnowledgeError>,
+}
+
+impl Knowledge {
+    /// The knowledge embedded in the binary (a copy of `knowledge/`).
+    pub fn builtin() -> Result<Knowledge, Vec<KnowledgeError>> {
+        let files: Vec<(PathBuf, String)> = BUILTIN
+            .iter()
+            .map(|(p, t)| {
+                (
+                    PathBuf::from(format!("builtin:knowledge/{p}")),
+                    t.to_string(),
+                )
+            })
+            .collect();
+        Self::from_files("builtin:knowledge", &files)
+    }
+
+    /// Reads and validates a knowledge directory.
+    pub fn load_dir(dir: &Path) -> Result<Knowledge, Vec<KnowledgeError>> {
+        let mut files = Vec::new();
+        let mut errors = Vec::new();
+        for sub in ["machines", "tools", "materials"] {
+            let d = dir.join(sub);
+            match load::ron_files(&d) {
+                Ok(list) => {
+                    for p in list {
+                        match std::fs::read_to_string(&p) {
+                            Ok(t) => files.push((p, t)),
+                            Err(e) => errors.push(KnowledgeError::Read {
+                                path: p,
+                                reason: e.to_string(),
+                            }),
+                        }
+                    }
+                }
+                Err(e) => errors.push(e),
+            }
+        }
+        match Self::from_files(&dir.display().to_string(), &files) {
+            Ok(k) if errors.is_empty() => Ok(k),
+            Ok(_) => Err(errors),
+            Err(mut more) => {
+                errors.append(&mut more);
+                Err(errors)
+            }
+        }
+    }
+
+    /// Builds knowledge from `(path, text)` pairs; the first path component
+    /// below the knowledge root (`machines`, `tools`, `materials`) says what
+    /// a file holds.
+    pub fn from_files(
+        origin: &str,
+        files: &[(PathBuf, String)],
+    ) -> Result<Knowledge, Vec<KnowledgeError>> {
+        let mut c = Collector {
+            k: Some(Knowledge {
+                origin: origin.to_string(),
+                machines: BTreeMap::new(),
+                tool_sets: BTreeMap::new(),
+                materials: BTreeMap::new(),
+            }),
+            errors: Vec::new(),
+        };
+        for (path, text) in files {
+            let parent = path
+                .parent()
+                .and_then(|p| p.file_name())
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            match parent.as_str() {
+                "machines" => c.add(path, text, |k| &mut k.machines, |m: &Machine| &m.id),
+                "tools" => c.add(path, text, |k| &mut k.tool_sets, |t: &ToolSet| &t.id),
+                "materials" => c.add(path, text, |k| &mut k.materials, |m: &Material| &m.id),
+                _ => c.errors.push(KnowledgeError::Invalid {
+                    path: path.clone(),
+                    reason: "not in a known knowledge folder (machines/, tools/, materials/)"
+                        .into(),
+                }),
+            }
+        }
+        let k = c.k.take().expect("set above");
+        let mut errors = c.errors;
+        errors.extend(validate(&k));
+        if errors.is_empty() {
+            Ok(k)
+        } else {
+            Err(errors)
+        }
+    }
+
+    pub fn machine(&self, id: &str) -> Option<&Machine> {
+        self.machines.get(id)
+    }
+
+    pub fn tool_set(&self, id: &str) -> Option<&ToolSet> {
+        self.tool_sets.get(id)
+    }
+
+    pub fn material(&self, id: &str) -> Option<&Material> {
+        self.materials.get(id)
+    }
+}
+
+impl Collector {
+    fn add<T: serde::de::DeserializeOwned>(
+        &mut self,
+        path: &Path,
+        text: &str,
+        map: impl Fn(&mut Knowledge) -> &mut BTreeMap<String, T>,
+        id: impl Fn(&T) -> &String,
+    ) {
+        match parse_ron::<T>(text, path) {
+            Ok(item) => {
+                let key = id(&item).clone();
+                let k = self.k.as_mut().expect("present while collecting");
+                let m = map(k);
+                if m.contains_key(&key) {
+                    self.errors.push(KnowledgeError::Invalid {
+                        path: path.to_path_buf(),
+                        reason: format!("duplicate id `{key}` (already defined by another file)"),
+                    });
+                } else {
+                    m.insert(key, item);
+                }
+            }
+            Err(e) => self.errors.push(e),
+        }
+    }
+}
+
+fn invalid(what: &str, reason: String) -> KnowledgeError {
+    KnowledgeError::Invalid {
+        path: PathBuf::from(what),
+        reason,
+    }
+}
+
+/// Checks values a parser cannot: ranges, positivity, references.
+fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
+    let mut errors = Vec::new();
+    let positive = |errors: &mut Vec<KnowledgeError>, what: &str, name: &str, v: f64| {
+        if !(v.is_finite() && v > 0.0) {
+            errors.push(invalid(
+                what,
+                format!("`{name}` must be a positive number, not {v}"),
+            ));
+        }
+    };
+    for m in k.machines.values() {
+        let what = format!("machine `{}`", m.id);
+        for (axis, a) in [("x", &m.x), ("y", &m.y), ("z", &m.z)] {
+            if !(a.travel.0 < a.travel.1) {
+                errors.push(invalid(
+                    &what,
+                    format!(
+                        "axis {axis}: travel ({}, {}) is empty",
+                        a.travel.0, a.travel.1
+                    ),
+                ));
+            }
+            positive(&mut errors, &what, &format!("{axis}.v_max"), a.v_max);
+            positive(&mut errors, &what, &format!("{axis}.a_max"), a.a_max);
+        }
+        positive(&mut errors, &what, "a_centripetal", m.a_centripetal);
+        positive(&mut errors, &what, "spindle_max_rpm", m.spindle_max_rpm);
+        match m.kinematics {
+            Kinematics::ThreeAxis => {}
+            Kinematics::ThreePlusTwo { max_tilt_deg }
+            | Kinematics::FiveAxisHead { max_tilt_deg } => {
+                if !(0.0..=180.0).contains(&max_tilt_deg) {
+                    errors.push(invalid(
+                        &what,
+                        format!("max_tilt_deg {max_tilt_deg} is outside 0..=180"),
+                    ));
+                }
+            }
+        }
+    }
+    for s in k.tool_sets.values() {
+        let mut seen = std::collections::BTreeSet::new();
+        if s.tools.is_empty() {
+            errors.push(invalid(
+                &format!("tool set `{}`", s.id),
+                "has no tools".into(),
+            ));
+        }
+        for t in &s.tools {
+            let what = format!("tool `{}` in set `{}`", t.id, s.id);
+            if !seen.insert(t.id.clone()) {
+                errors.push(invalid(&what, "duplicate tool id".into()));
+            }
+            for (n, v) in [
+                ("diameter", t.diameter),
+                ("flute_length", t.flute_length),
+                ("stickout", t.stickout),
+                ("shank_diameter", t.shank_diameter),
+                ("holder_diameter", t.holder_diameter),
+                ("max_slot_depth_ratio", t.max_slot_depth_ratio),
+            ] {
+                positive(&mut errors, &what, n, v);
+            }
+            if t.corner_radius < 0.0 || t.corner_radius > t.diameter / 2.0 {
+                errors.push(invalid(
+                    &what,
+                    format!(
+                        "corner_radius {} must lie in 0..=diameter/2 ({})",
+                        t.corner_radius,
+                        t.diameter / 2.0
+                    ),
+                ));
+            }
+            if t.flute_length > t.stickout {
+                errors.push(invalid(
+                    &what,
+                    format!(
+                        "flute_length {} is longer than the stickout {}",
+                        t.flute_length, t.stickout
+                    ),
+                ));
+            }
+        }
+    }
+    for m in k.materials.values() {
+        let what = format!("material `{}`", m.id);
+        positive(&mut errors, &what, "youngs_modulus", m.youngs_modulus);
+        positive(&mut errors, &what, "density", m.density);
+        positive(&mut errors, &what, "cutting_speed", m.cutting.cutting_speed);
+        positive(
+            &mut errors,
+            &what,
+            "feed_per_tooth_roughing",
+            m.cutting.feed_per_tooth_roughing,
+        );
+        positive(
+            &mut errors,
+            &what,
+            "feed_per_tooth_finishing",
+            m.cutting.feed_per_tooth_finishing,
+        );
+    }
+    errors
+}

@@ -1,0 +1,112 @@
+use std::path::{Path, PathBuf};
+
+use thinplan_knowledge::*;
+
+fn repo_knowledge() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../knowledge")
+}
+
+#[test]
+fn repository_knowledge_loads_and_equals_the_embedded_copy() {
+    let dir = Knowledge::load_dir(&repo_knowledge()).unwrap();
+    let builtin = Knowledge::builtin().unwrap();
+    assert_eq!(dir.machines, builtin.machines);
+    assert_eq!(dir.tool_sets, builtin.tool_sets);
+    assert_eq!(dir.materials, builtin.materials);
+    assert!(dir.machine(DEFAULT_MACHINE).is_some());
+    let tools = dir.tool_set(DEFAULT_TOOL_SET).unwrap();
+    let mut diameters: Vec<f64> = tools.tools.iter().map(|t| t.diameter).collect();
+    diameters.sort_by(f64::total_cmp);
+    assert_eq!(diameters, vec![12.0, 20.0]);
+    assert_eq!(
+        dir.material(DEFAULT_MATERIAL).unwrap().youngs_modulus,
+        71000.0
+    );
+}
+
+fn copy_of_knowledge(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("thinplan-knowledge-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    for sub in ["machines", "tools", "materials"] {
+        std::fs::create_dir_all(d.join(sub)).unwrap();
+        for e in std::fs::read_dir(repo_knowledge().join(sub)).unwrap() {
+            let p = e.unwrap().path();
+            std::fs::copy(&p, d.join(sub).join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    d
+}
+
+#[test]
+fn syntax_error_names_file_line_and_column() {
+    let d = copy_of_knowledge("syntax");
+    let f = d.join("materials/al7075.ron");
+    let text = std::fs::read_to_string(&f).unwrap();
+    // Line 5 of the file is `youngs_modulus: 71000.0,`; break its value.
+    let line = text
+        .lines()
+        .position(|l| l.contains("youngs_modulus"))
+        .unwrap()
+        + 1;
+    std::fs::write(&f, text.replace("71000.0", "seventy")).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    let msg = errors[0].to_string();
+    assert!(msg.contains("al7075.ron"), "{msg}");
+    assert!(msg.contains(&format!(":{line}:")), "{msg}");
+}
+
+#[test]
+fn unknown_field_is_refused_with_its_name() {
+    let d = copy_of_knowledge("unknown");
+    let f = d.join("machines/hsm_5axis.ron");
+    let text = std::fs::read_to_string(&f).unwrap();
+    std::fs::write(&f, text.replace("spindle_power_kw", "spindle_powr_kw")).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    let msg = errors[0].to_string();
+    assert!(
+        msg.contains("spindle_powr_kw") && msg.contains("hsm_5axis.ron"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn all_problems_are_reported_in_one_run() {
+    let d = copy_of_knowledge("many");
+    // A duplicate machine id, a syntax error in a material, a bad tool value.
+    std::fs::copy(
+        d.join("machines/hsm_5axis.ron"),
+        d.join("machines/copy.ron"),
+    )
+    .unwrap();
+    std::fs::write(d.join("materials/broken.ron"), "( id: \"x\", ").unwrap();
+    let t = d.join("tools/endmills_12_20.ron");
+    let text = std::fs::read_to_string(&t).unwrap();
+    std::fs::write(&t, text.replacen("diameter: 12.0", "diameter: -12.0", 1)).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    let all: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+    assert!(
+        all.iter().any(|m| m.contains("duplicate id `hsm_5axis`")),
+        "{all:?}"
+    );
+    assert!(all.iter().any(|m| m.contains("broken.ron:")), "{all:?}");
+    assert!(
+        all.iter()
+            .any(|m| m.contains("`diameter` must be a positive")),
+        "{all:?}"
+    );
+}
+
+#[test]
+fn machine_reach_follows_its_kinematics() {
+    let k = Knowledge::builtin().unwrap();
+    let mut m = k.machine(DEFAULT_MACHINE).unwrap().clone();
+    let side = glam::DVec3::X;
+    let under = -glam::DVec3::Z;
+    assert!(m.reaches(glam::DVec3::Z));
+    assert!(m.reaches(side));
+    assert!(!m.reaches(under));
+    m.kinematics = Kinematics::ThreeAxis;
+    assert!(m.reaches(glam::DVec3::Z));
+    assert!(!m.reaches(side));
+}
