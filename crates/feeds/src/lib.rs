@@ -1,0 +1,491 @@
+//! Machine motion model and time-optimal feed schedule.
+//!
+//! This is the time model with which every tool path of the project is measured: give it a
+//! path (points in mm) and the commanded cutting-feed cap per segment, get back the speed at
+//! every point and the time at which the tool gets there.
+//!
+//! # Algorithm
+//!
+//! Bieterman's two-pass scheme (Bieterman & Sandstrom, Boeing), with arc length `s` as the
+//! independent variable and `u = v²` as the state, so that constant tangential acceleration
+//! `a` is a straight line `du/ds = 2a`:
+//!
+//! 1. **Geometry.** Segment `i` runs from `points[i]` to `points[i+1]`; its unit direction
+//!    `d_i` is the tangent along it. At every interior point the curvature vector
+//!    `c_j = κ_j·n_j` is that of the circle through the point and its two neighbours (Menger
+//!    curvature `κ = 2 sin θ / |p_{j+1} − p_{j−1}|`, θ the turning angle, `n` the unit normal
+//!    towards the centre). This is exact for points on a circle. A point whose turning angle
+//!    exceeds [`MachineLimits::corner_angle_deg`] is a **corner**: the speed there is 0 and
+//!    its curvature is not used (the kink is not a circle). The two path ends copy the
+//!    curvature of their neighbour (a sampled curve continues), and have speed 0.
+//! 2. **Speed caps.** Every segment gets a cruise cap `vc_i`, the least of: its feed cap; the
+//!    per-axis velocity limit along its direction, `min_k V_k/|d_ik|`; and at each of its two
+//!    end points `j` the centripetal cap `sqrt(A_c/κ_j)` and the per-axis acceleration
+//!    projected on the normal, `min_k sqrt(A_k/|c_jk|)`. A point's cap is the least cap of the
+//!    segments that meet there (0 at ends and corners). The normal cap guarantees that at
+//!    every admissible speed zero tangential acceleration is feasible, which is what makes the
+//!    two passes consistent (see below).
+//! 3. **Forward pass** (acceleration): `u_{i+1} = min(cap_{i+1}, u_i + 2·a⁺_i·Δs_i)`.
+//! 4. **Backward pass** (deceleration): `u_i = min(u_i, u_{i+1} + 2·a⁻_i·Δs_i)`.
+//! 5. **Time.** Within a segment the speed profile is the exact time-optimal one for constant
+//!    limits, `u(σ) = min(u_i + 2a⁺σ, vc_i², u_{i+1} + 2a⁻(Δs − σ))`: accelerate, cruise,
+//!    decelerate. Its time is summed in closed form (`Δt = 2d/(v_a + v_b)` for each constant
+//!    acceleration piece, which is also right when one of the speeds is 0, and `d/v` for the
+//!    cruise). When the segment never reaches its cruise cap this is the usual trapezoidal
+//!    rule `Δt = 2Δs/(v_i + v_{i+1})`. Long straight segments are thus timed exactly, however
+//!    coarse the point spacing.
+//!
+//! **Tangential acceleration (the choice the design leaves open).** The available tangential
+//! acceleration is *reduced by the normal acceleration already in use*, axis by axis: each
+//! axis sees `d_ik·a + c_jk·u`, and we require `|d_ik·a + c_jk·u| ≤ A_k` at both end points
+//! `j` of the segment, for every `u` the segment's acceleration (deceleration) phase passes
+//! through. The bound is linear in `u`, so it is solved in closed form per segment (no
+//! iteration): `a⁺` is the largest acceleration for which the constraint holds from `u_i` up
+//! to `min(vc_i², u_i + 2a⁺Δs)`; `a⁻` the same backwards from `u_{i+1}`. With no curvature
+//! this is `a = min_k A_k/|d_ik|`. This coupling is what TOPP-RA's per-axis
+//! `JointAccelerationConstraint` models too, and is needed to come within 1 % of it on
+//! curved paths. The centripetal cap `A_c` caps only the normal acceleration and does not
+//! take from the tangential budget.
+//!
+//! Why the passes are consistent: `0 ∈ [a⁻-range]` at every admissible speed (the normal cap),
+//! so a point lowered by the backward pass only turns its segments into deceleration, which
+//! the backward pass itself has checked; recomputing `a⁺` from the final speeds in step 5
+//! never needs more than the forward pass allowed.
+//!
+//! Cost: five linear passes over the points and one scratch allocation (besides the three
+//! output vectors); tens of millions of points per second in release (see the README).
+//!
+//! # Conventions
+//!
+//! Units: mm, s, mm/s, mm/s². Segments shorter than [`DEGENERATE_LEN`] are treated as
+//! repeated points: they take no time, impose no direction, and are skipped when the turning
+//! angle and curvature of their neighbours are computed (so a corner with a duplicated point
+//! is still a corner).
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+pub mod paths;
+
+/// Segments shorter than this (mm) are repeated points: no direction, no time.
+pub const DEGENERATE_LEN: f64 = 1e-9;
+
+/// Per-axis limits of the machine (mm/s, mm/s²), plus a centripetal acceleration cap and the
+/// angle above which a path junction is a corner where the feed must drop to zero.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MachineLimits {
+    /// Maximum axis velocity X, Y, Z (mm/s), each > 0.
+    pub v_max: [f64; 3],
+    /// Maximum axis acceleration (and deceleration) X, Y, Z (mm/s²), each > 0.
+    pub a_max: [f64; 3],
+    /// Cap on the centripetal (normal) acceleration v²κ (mm/s²), > 0; `f64::INFINITY` disables it.
+    pub a_centripetal: f64,
+    /// Turning angle (degrees) above which a junction is a corner with v = 0.
+    pub corner_angle_deg: f64,
+}
+
+impl MachineLimits {
+    /// A typical high-speed milling machine: 500 mm/s (30 m/min) and 5000 mm/s² (0.5 g) per
+    /// axis, centripetal cap 5000 mm/s², corners above 30°. `D = V²/(2A) = 25 mm`.
+    pub fn typical_hsm() -> Self {
+        Self {
+            v_max: [500.0; 3],
+            a_max: [5000.0; 3],
+            a_centripetal: 5000.0,
+            corner_angle_deg: 30.0,
+        }
+    }
+
+    /// Bieterman's `D = V²/(2A)`: the distance to reach full speed from rest, here for the
+    /// slowest-to-accelerate of the X and Y axes.
+    pub fn accel_distance(&self) -> f64 {
+        (0..2)
+            .map(|k| self.v_max[k] * self.v_max[k] / (2.0 * self.a_max[k]))
+            .fold(0.0, f64::max)
+    }
+
+    fn assert_valid(&self) {
+        for k in 0..3 {
+            assert!(
+                self.v_max[k] > 0.0 && self.a_max[k] > 0.0,
+                "MachineLimits: v_max and a_max must be > 0 (axis {k}: {} mm/s, {} mm/s²)",
+                self.v_max[k],
+                self.a_max[k]
+            );
+        }
+        assert!(
+            self.a_centripetal > 0.0,
+            "MachineLimits: a_centripetal must be > 0 (use f64::INFINITY to disable)"
+        );
+        assert!(
+            self.corner_angle_deg.is_finite() && self.corner_angle_deg >= 0.0,
+            "MachineLimits: corner_angle_deg must be finite and >= 0"
+        );
+    }
+}
+
+impl Default for MachineLimits {
+    fn default() -> Self {
+        Self::typical_hsm()
+    }
+}
+
+/// A feed schedule: speed and time at every path point.
+///
+/// Between two points the speed follows the accelerate–cruise–decelerate profile described in
+/// the crate documentation, so it may exceed both end-point speeds inside a long segment; the
+/// times are exact for that profile. For an NC program use [`Schedule::segment_feed`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Schedule {
+    /// Arc length at each point (mm), `s[0] = 0`.
+    pub s: Vec<f64>,
+    /// Speed at each point (mm/s).
+    pub v: Vec<f64>,
+    /// Time at each point (s), `t[0] = 0`.
+    pub t: Vec<f64>,
+    /// Time to run the whole path (s), `t.last()`.
+    pub total_time: f64,
+    /// Path length (mm), `s.last()`.
+    pub length: f64,
+}
+
+impl Schedule {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.s.len()
+    }
+
+    /// True for an empty path.
+    pub fn is_empty(&self) -> bool {
+        self.s.is_empty()
+    }
+
+    /// Mean feed over segment `i` (mm/s): `Δs/Δt`, the F word that gives the same time.
+    /// 0 for a segment of zero length.
+    pub fn segment_feed(&self, i: usize) -> f64 {
+        let ds = self.s[i + 1] - self.s[i];
+        let dt = self.t[i + 1] - self.t[i];
+        if dt > 0.0 {
+            ds / dt
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Schedule a path with one feed cap for all segments.
+///
+/// # Panics
+/// As [`schedule_polyline`].
+pub fn schedule_polyline_uniform(points: &[DVec3], feed: f64, limits: &MachineLimits) -> Schedule {
+    let caps = vec![feed; points.len().saturating_sub(1)];
+    schedule_polyline(points, &caps, limits)
+}
+
+/// Per-point scratch: the outgoing segment and the point's curvature.
+#[derive(Clone, Copy)]
+struct Work {
+    /// Unit direction of segment i (zero when degenerate).
+    d: DVec3,
+    /// Length of segment i.
+    len: f64,
+    /// Cruise cap² of segment i.
+    vc2: f64,
+    /// Curvature vector at point i (first pass: the incoming segment vector).
+    c: DVec3,
+    /// Speed cap² at point i.
+    cap2: f64,
+}
+
+/// Time-optimal feed schedule along a polyline (Bieterman's two-pass algorithm; see the crate
+/// documentation for the exact motion model).
+///
+/// `feed_cap[i]` caps the speed on the segment from `points[i]` to `points[i+1]` (mm/s).
+///
+/// # Panics
+/// If `feed_cap.len() != points.len() - 1` (for a non-empty path), if a feed cap is not > 0
+/// (NaN included), or if `limits` are not positive.
+pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLimits) -> Schedule {
+    limits.assert_valid();
+    let n = points.len();
+    if n == 0 {
+        return Schedule::default();
+    }
+    assert_eq!(
+        feed_cap.len(),
+        n - 1,
+        "schedule_polyline: need one feed cap per segment ({} points, {} caps)",
+        n,
+        feed_cap.len()
+    );
+    let mut s = Vec::with_capacity(n);
+    let mut u = Vec::with_capacity(n);
+    let mut t = Vec::with_capacity(n);
+    if n == 1 {
+        return Schedule {
+            s: vec![0.0],
+            v: vec![0.0],
+            t: vec![0.0],
+            total_time: 0.0,
+            length: 0.0,
+        };
+    }
+
+    let zero = Work {
+        d: DVec3::ZERO,
+        len: 0.0,
+        vc2: f64::INFINITY,
+        c: DVec3::ZERO,
+        cap2: f64::INFINITY,
+    };
+    let mut w = vec![zero; n];
+
+    // Pass 1 (forward): segments, arc length, and for each point the incoming segment vector
+    // (skipping degenerate segments) stored provisionally in `c`.
+    let mut acc = 0.0;
+    let mut incoming = DVec3::ZERO;
+    s.push(0.0);
+    for i in 0..n - 1 {
+        let f = feed_cap[i];
+        assert!(f > 0.0, "schedule_polyline: feed cap of segment {i} must be > 0, got {f}");
+        let delta = points[i + 1] - points[i];
+        let len = delta.length();
+        acc += len;
+        s.push(acc);
+        let wi = &mut w[i];
+        wi.c = incoming;
+        if len > DEGENERATE_LEN {
+            wi.d = delta / len;
+            wi.len = len;
+            incoming = delta;
+        }
+        wi.vc2 = f * f;
+    }
+    w[n - 1].c = incoming;
+
+    // Pass 2 (backward): curvature vector and corners, with the outgoing segment vector carried.
+    let cos_corner = limits.corner_angle_deg.to_radians().cos();
+    let mut outgoing = DVec3::ZERO;
+    for j in (0..n).rev() {
+        if j + 1 < n && w[j].len > 0.0 {
+            outgoing = w[j].d * w[j].len;
+        }
+        let a = w[j].c;
+        let mut c = DVec3::ZERO;
+        if j > 0 && j + 1 < n && a != DVec3::ZERO && outgoing != DVec3::ZERO {
+            let (la, lb) = (a.length(), outgoing.length());
+            let (da, db) = (a / la, outgoing / lb);
+            let cos = da.dot(db);
+            if cos < cos_corner {
+                w[j].cap2 = 0.0;
+            } else {
+                let chord = a + outgoing;
+                let cl = chord.length();
+                let sin = da.cross(db).length();
+                if sin > 1e-15 && cl > 0.0 {
+                    let kappa = 2.0 * sin / cl;
+                    let tan = chord / cl;
+                    let turn = db - da;
+                    let nrm = (turn - tan * turn.dot(tan)).normalize_or_zero();
+                    c = nrm * kappa;
+                }
+            }
+        }
+        w[j].c = c;
+    }
+    w[0].cap2 = 0.0;
+    w[n - 1].cap2 = 0.0;
+    if n >= 3 {
+        // The ends continue the curve of their neighbour (not across a corner: c = 0 there).
+        w[0].c = w[1].c;
+        w[n - 1].c = w[n - 2].c;
+    }
+
+    // Pass 3: segment cruise caps and point caps.
+    let inv_v: [f64; 3] = std::array::from_fn(|k| 1.0 / limits.v_max[k]);
+    for i in 0..n - 1 {
+        let wi = w[i];
+        if wi.len > 0.0 {
+            let mut vc2 = wi.vc2;
+            // Per-axis velocity along the segment: v·|d_k| ≤ V_k.
+            let r = (wi.d.x.abs() * inv_v[0])
+                .max(wi.d.y.abs() * inv_v[1])
+                .max(wi.d.z.abs() * inv_v[2]);
+            vc2 = vc2.min(1.0 / (r * r));
+            for c in [wi.c, w[i + 1].c] {
+                vc2 = vc2.min(normal_cap2(c, limits));
+            }
+            w[i].vc2 = vc2;
+        }
+        let vc2 = w[i].vc2;
+        w[i].cap2 = w[i].cap2.min(vc2);
+        w[i + 1].cap2 = w[i + 1].cap2.min(vc2);
+    }
+
+    // Pass 4: forward (acceleration).
+    u.push(0.0);
+    for i in 0..n - 1 {
+        let wi = &w[i];
+        let ui = u[i];
+        let next = if wi.len > 0.0 {
+            let a = accel_bound(ui, wi, &w[i + 1].c, 1.0, limits);
+            ui + 2.0 * a * wi.len
+        } else {
+            ui
+        };
+        u.push(next.min(w[i + 1].cap2));
+    }
+    // Pass 5: backward (deceleration).
+    for i in (0..n - 1).rev() {
+        let wi = &w[i];
+        let un = u[i + 1];
+        let lim = if wi.len > 0.0 {
+            let b = accel_bound(un, wi, &w[i + 1].c, -1.0, limits);
+            un + 2.0 * b * wi.len
+        } else {
+            un
+        };
+        if lim < u[i] {
+            u[i] = lim;
+        }
+    }
+
+    // Pass 6: time, speeds.
+    let mut time = 0.0;
+    t.push(0.0);
+    for i in 0..n - 1 {
+        let wi = &w[i];
+        if wi.len > 0.0 {
+            let a = accel_bound(u[i], wi, &w[i + 1].c, 1.0, limits);
+            let b = accel_bound(u[i + 1], wi, &w[i + 1].c, -1.0, limits);
+            time += segment_time(u[i], u[i + 1], wi.vc2, a, b, wi.len);
+        }
+        t.push(time);
+        u[i] = u[i].max(0.0).sqrt();
+    }
+    u[n - 1] = u[n - 1].max(0.0).sqrt();
+
+    Schedule {
+        s,
+        v: u,
+        t,
+        total_time: time,
+        length: acc,
+    }
+}
+
+/// Speed² cap from a curvature vector: centripetal cap and per-axis normal acceleration.
+#[inline]
+fn normal_cap2(c: DVec3, limits: &MachineLimits) -> f64 {
+    let kappa = c.length();
+    if kappa == 0.0 {
+        return f64::INFINITY;
+    }
+    let mut cap = limits.a_centripetal / kappa;
+    for k in 0..3 {
+        let ck = c[k].abs();
+        if ck > 0.0 {
+            cap = cap.min(limits.a_max[k] / ck);
+        }
+    }
+    cap
+}
+
+/// Largest tangential acceleration (`dir = 1`, forward from `u0`) or deceleration (`dir = -1`,
+/// backward from `u0` at the segment's far end) on segment `w` such that every axis keeps
+/// `|d_k·a + c_k·u| ≤ A_k` with the curvature vectors of both end points, for every `u` from
+/// `u0` up to `min(vc², u0 + 2aΔs)`.
+#[inline]
+fn accel_bound(u0: f64, w: &Work, c_far: &DVec3, dir: f64, limits: &MachineLimits) -> f64 {
+    let ds = w.len;
+    let vc2 = w.vc2.max(u0);
+    let mut a_free = f64::INFINITY;
+    let mut a_cap = f64::INFINITY;
+    for c in [&w.c, c_far] {
+        for k in 0..3 {
+            let dk = w.d[k];
+            let adk = dk.abs();
+            if adk < 1e-12 {
+                continue; // only a speed cap, in vc²
+            }
+            // Constraint: |dk|·a + σ·u ≤ A_k.
+            let sigma = dir * dk.signum() * c[k];
+            let ak = limits.a_max[k];
+            let at_u0 = (ak - sigma * u0) / adk;
+            let at_cap = (ak - sigma * vc2) / adk;
+            a_cap = a_cap.min(at_u0).min(at_cap);
+            let free = if sigma > 0.0 {
+                // Binding at the end of the phase: |dk|·a + σ(u0 + 2aΔs) ≤ A_k.
+                (ak - sigma * u0) / (adk + 2.0 * sigma * ds)
+            } else {
+                at_u0
+            };
+            a_free = a_free.min(free);
+        }
+    }
+    let a_free = a_free.max(0.0);
+    if u0 + 2.0 * a_free * ds <= vc2 {
+        a_free
+    } else {
+        // The phase reaches the cruise cap: the constraint is needed only up to vc².
+        ((vc2 - u0) / (2.0 * ds)).max(a_cap).max(0.0)
+    }
+}
+
+/// Time over a segment of length `ds` with end speeds² `u0`, `u1`, cruise cap² `vc2`,
+/// acceleration `a` from the start and deceleration `b` into the end:
+/// `u(σ) = min(u0 + 2aσ, vc2, u1 + 2b(ds − σ))`.
+#[inline]
+fn segment_time(u0: f64, u1: f64, vc2: f64, a: f64, b: f64, ds: f64) -> f64 {
+    let umax = u0.max(u1);
+    let peak = if a + b > 0.0 {
+        let x = (u1 + 2.0 * b * ds - u0) / (2.0 * (a + b));
+        u0 + 2.0 * a * x
+    } else {
+        umax
+    };
+    let up = peak.min(vc2).max(umax);
+    let d1 = if a > 0.0 { (up - u0) / (2.0 * a) } else { 0.0 };
+    let d3 = if b > 0.0 { (up - u1) / (2.0 * b) } else { 0.0 };
+    let d2 = (ds - d1 - d3).max(0.0);
+    let (v0, v1, vp) = (u0.sqrt(), u1.sqrt(), up.sqrt());
+    let mut t = 0.0;
+    if d1 > 0.0 {
+        t += 2.0 * d1 / (v0 + vp);
+    }
+    if d3 > 0.0 {
+        t += 2.0 * d3 / (vp + v1);
+    }
+    if d2 > 0.0 {
+        t += d2 / vp;
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segment_time_pieces() {
+        // Pure acceleration from rest: t = 2d/v.
+        let t = segment_time(0.0, 100.0, 1e9, 50.0, 50.0, 1.0);
+        assert!((t - 0.2).abs() < 1e-12);
+        // Rest to rest, a = b = 1, ds = 2: peak at 1 → u = 2, t = 2·sqrt(2).
+        let t = segment_time(0.0, 0.0, 1e9, 1.0, 1.0, 2.0);
+        assert!((t - 2.0 * 2f64.sqrt()).abs() < 1e-12);
+        // With a cruise cap of 1: accel 0.5, cruise 1, decel 0.5 → 1 + 1 + 1.
+        let t = segment_time(0.0, 0.0, 1.0, 1.0, 1.0, 2.0);
+        assert!((t - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tiny_inputs() {
+        let l = MachineLimits::typical_hsm();
+        assert!(schedule_polyline_uniform(&[], 100.0, &l).is_empty());
+        let one = schedule_polyline_uniform(&[DVec3::ONE], 100.0, &l);
+        assert_eq!((one.len(), one.total_time), (1, 0.0));
+        let same = schedule_polyline_uniform(&[DVec3::ONE, DVec3::ONE], 100.0, &l);
+        assert_eq!(same.total_time, 0.0);
+    }
+}
