@@ -1,0 +1,330 @@
+//! Benchmark: curvilinear vs parallel-offset (vs FreeCAD Adaptive) machining time over L/D.
+
+use cavalier_contours::polyline::{PlineSourceMut, Polyline};
+use glam::DVec2;
+use serde::Serialize;
+use std::path::PathBuf;
+
+use crate::geom::sample_pline;
+use crate::timing::{time_path, MachineLimits};
+use crate::{curvilinear_path, offset_path, Pocket, PocketError, PocketParams};
+
+/// A convex polygon (counter-clockwise vertices) with every corner rounded by radius `rc`.
+pub fn rounded_polygon(vertices: &[DVec2], rc: f64) -> Polyline<f64> {
+    let n = vertices.len();
+    let mut pl = Polyline::new_closed();
+    for i in 0..n {
+        let v = vertices[i];
+        let prev = vertices[(i + n - 1) % n];
+        let next = vertices[(i + 1) % n];
+        let a = (prev - v).normalize();
+        let b = (next - v).normalize();
+        let interior = a.dot(b).clamp(-1.0, 1.0).acos();
+        let t = rc / (interior / 2.0).tan();
+        let turn = std::f64::consts::PI - interior;
+        let p_in = v + a * t;
+        let p_out = v + b * t;
+        pl.add(p_in.x, p_in.y, (turn / 4.0).tan());
+        pl.add(p_out.x, p_out.y, 0.0);
+    }
+    pl
+}
+
+/// Circle of diameter `d` centred at the origin.
+pub fn circle(d: f64) -> Polyline<f64> {
+    let mut pl = Polyline::new_closed();
+    pl.add(d / 2.0, 0.0, 1.0);
+    pl.add(-d / 2.0, 0.0, 1.0);
+    pl
+}
+
+/// Rounded rectangle `w` × `h`, corner radius `rc`, centred at the origin.
+pub fn rounded_rect(w: f64, h: f64, rc: f64) -> Polyline<f64> {
+    let (x, y) = (w / 2.0, h / 2.0);
+    rounded_polygon(
+        &[
+            DVec2::new(-x, -y),
+            DVec2::new(x, -y),
+            DVec2::new(x, y),
+            DVec2::new(-x, y),
+        ],
+        rc,
+    )
+}
+
+/// Regular n-gon with circumradius `rho` (a vertex at the top), corners rounded by `rc`.
+pub fn rounded_ngon(n: usize, rho: f64, rc: f64) -> Polyline<f64> {
+    let v: Vec<DVec2> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::FRAC_PI_2 + std::f64::consts::TAU * i as f64 / n as f64;
+            rho * DVec2::from_angle(a)
+        })
+        .collect();
+    rounded_polygon(&v, rc)
+}
+
+/// A bench pocket shape at characteristic size `l` (largest bounding-box side), with the
+/// narrowest width `w` of the shape (used to size the tool).
+#[derive(Debug, Clone)]
+pub struct BenchPocket {
+    pub pocket: Pocket,
+    pub width: f64,
+}
+
+/// The bench family at size `l`: circle, rounded square, Bieterman's rounded pentagon, an
+/// isogrid triangle with rounded corners, a slot-like rounded rectangle (4:1).
+pub fn bench_family(l: f64) -> Vec<BenchPocket> {
+    let pent_rho = l / (2.0 * 72f64.to_radians().sin());
+    let tri_rho = l / 3f64.sqrt(); // side l
+    vec![
+        BenchPocket {
+            pocket: Pocket::new("circle", circle(l)),
+            width: l,
+        },
+        BenchPocket {
+            pocket: Pocket::new("rounded-square", rounded_rect(l, l, 0.15 * l)),
+            width: l,
+        },
+        BenchPocket {
+            pocket: Pocket::new("pentagon", rounded_ngon(5, pent_rho, 0.2 * pent_rho)),
+            width: 2.0 * pent_rho * 36f64.to_radians().cos(),
+        },
+        BenchPocket {
+            pocket: Pocket::new("isogrid-triangle", rounded_ngon(3, tri_rho, 0.12 * l)),
+            width: l / 3f64.sqrt(),
+        },
+        BenchPocket {
+            pocket: Pocket::new("slot", rounded_rect(l, l / 4.0, 0.3 * l / 4.0)),
+            width: l / 4.0,
+        },
+    ]
+}
+
+/// FreeCAD Adaptive peer: `python script in.json out.json` (see `tools/peers/freecad/`).
+#[derive(Debug, Clone)]
+pub struct AdaptivePeer {
+    pub python: String,
+    pub script: PathBuf,
+}
+
+impl AdaptivePeer {
+    /// The peer in this checkout if `tools/peers/freecad/setup.sh` has been run (the unpacked
+    /// FreeCAD library exists), else `None`.
+    pub fn detect() -> Option<AdaptivePeer> {
+        let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/peers/freecad");
+        let script = root.join("adaptive_pocket.py");
+        let home = std::env::var_os("HOME")?;
+        let lib = PathBuf::from(home).join(".cache/thinplan-freecad/usr/lib/freecad-python3/lib/area.so");
+        if script.exists() && lib.exists() {
+            Some(AdaptivePeer {
+                python: "python3".into(),
+                script,
+            })
+        } else {
+            None
+        }
+    }
+
+    /// Run FreeCAD's Adaptive2d on the pocket; the tool-centre path as one polyline.
+    pub fn run(&self, pocket: &Pocket, params: &PocketParams) -> Result<Vec<DVec2>, String> {
+        let size = pocket.size();
+        let pts = sample_pline(&pocket.outer, size / 400.0, 2f64.to_radians());
+        let input = serde_json::json!({
+            "outer": pts.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>(),
+            "tool_diameter": params.tool_diameter,
+            "stepover": params.stepover,
+            "finish_stepover": params.finish_stepover,
+        });
+        let dir = std::env::temp_dir().join(format!(
+            "thinplan-adaptive-{}-{}",
+            std::process::id(),
+            pocket.name
+        ));
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        let inp = dir.join("in.json");
+        let outp = dir.join("out.json");
+        std::fs::write(&inp, input.to_string()).map_err(|e| e.to_string())?;
+        let st = std::process::Command::new(&self.python)
+            .arg(&self.script)
+            .arg(&inp)
+            .arg(&outp)
+            .output()
+            .map_err(|e| e.to_string())?;
+        if !st.status.success() {
+            return Err(String::from_utf8_lossy(&st.stderr).into_owned());
+        }
+        let text = std::fs::read_to_string(&outp).map_err(|e| e.to_string())?;
+        let _ = std::fs::remove_dir_all(&dir);
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+        let pts = v["points"]
+            .as_array()
+            .ok_or("no points in FreeCAD output")?
+            .iter()
+            .filter_map(|p| Some(DVec2::new(p[0].as_f64()?, p[1].as_f64()?)))
+            .collect::<Vec<_>>();
+        if pts.len() < 2 {
+            return Err("FreeCAD Adaptive returned no path".into());
+        }
+        Ok(pts)
+    }
+}
+
+/// Benchmark configuration.
+#[derive(Debug, Clone)]
+pub struct BenchConfig {
+    pub limits: MachineLimits,
+    /// Cutting feed cap (mm/s); `None` = the machine's X/Y velocity limit (Bieterman's setting:
+    /// the feed is limited by the axis drives only).
+    pub feed: Option<f64>,
+    /// Pocket sizes as multiples of D = V²/(2A).
+    pub l_over_d: Vec<f64>,
+    /// Which pockets (by name); empty = all.
+    pub pockets: Vec<String>,
+    /// FreeCAD Adaptive peer, if available.
+    pub adaptive: Option<AdaptivePeer>,
+}
+
+impl Default for BenchConfig {
+    fn default() -> Self {
+        BenchConfig {
+            limits: MachineLimits::typical_hsm(),
+            feed: None,
+            l_over_d: vec![0.5, 1.0, 2.0, 4.0, 10.0],
+            pockets: Vec::new(),
+            adaptive: AdaptivePeer::detect(),
+        }
+    }
+}
+
+/// Length and time of one path.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathStats {
+    pub length_mm: f64,
+    pub time_s: f64,
+    /// Max measured gap between successive orbits (mm); null for peers.
+    pub max_gap_mm: Option<f64>,
+}
+
+/// The curvilinear path's stats and the method actually used.
+#[derive(Debug, Clone, Serialize)]
+pub struct CurvilinearStats {
+    pub length_mm: f64,
+    pub time_s: f64,
+    pub max_gap_mm: f64,
+    /// "curvilinear" or "offset-fallback".
+    pub method: String,
+}
+
+/// One benchmark row.
+#[derive(Debug, Clone, Serialize)]
+pub struct BenchRow {
+    pub pocket: String,
+    pub l_over_d: f64,
+    /// L (mm): largest bounding-box side.
+    pub size_mm: f64,
+    pub stepover_mm: f64,
+    pub tool_mm: f64,
+    pub offset: PathStats,
+    pub curvilinear: CurvilinearStats,
+    pub adaptive: Option<PathStats>,
+    /// Time saving of curvilinear vs offset, % of the offset time.
+    pub saving_pct: f64,
+    /// Schedule time / TOPP-RA time (to be filled by the TOPP-RA peer).
+    pub toppra_ratio: Option<f64>,
+}
+
+/// Parameters used for a bench pocket: tool = width / 6, stepover 40 % and finishing 10 % of
+/// the tool (so every size has the same geometry in tool units; only L/D changes).
+pub fn bench_params(bp: &BenchPocket) -> PocketParams {
+    PocketParams::for_tool(bp.width / 6.0)
+}
+
+/// Time offset, curvilinear and (if available) FreeCAD Adaptive paths over the bench family.
+pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
+    let d = cfg.limits.accel_distance();
+    let feed = cfg
+        .feed
+        .unwrap_or(cfg.limits.v_max[0].min(cfg.limits.v_max[1]));
+    let mut rows = Vec::new();
+    for &ld in &cfg.l_over_d {
+        let l = ld * d;
+        for bp in bench_family(l) {
+            if !cfg.pockets.is_empty() && !cfg.pockets.iter().any(|p| *p == bp.pocket.name) {
+                continue;
+            }
+            let params = bench_params(&bp);
+            let off = offset_path(&bp.pocket, &params)?;
+            let cur = curvilinear_path(&bp.pocket, &params)?;
+            let t_off = time_path(&off.points, feed, &cfg.limits);
+            let t_cur = time_path(&cur.points, feed, &cfg.limits);
+            let adaptive = cfg.adaptive.as_ref().and_then(|peer| {
+                peer.run(&bp.pocket, &params).ok().map(|pts| {
+                    let t = time_path(&pts, feed, &cfg.limits);
+                    PathStats {
+                        length_mm: t.length,
+                        time_s: t.total_time,
+                        max_gap_mm: None,
+                    }
+                })
+            });
+            rows.push(BenchRow {
+                pocket: bp.pocket.name.clone(),
+                l_over_d: ld,
+                size_mm: l,
+                stepover_mm: params.stepover,
+                tool_mm: params.tool_diameter,
+                offset: PathStats {
+                    length_mm: t_off.length,
+                    time_s: t_off.total_time,
+                    max_gap_mm: Some(off.max_gap),
+                },
+                curvilinear: CurvilinearStats {
+                    length_mm: t_cur.length,
+                    time_s: t_cur.total_time,
+                    max_gap_mm: cur.max_gap,
+                    method: cur.method.as_str().into(),
+                },
+                adaptive,
+                saving_pct: 100.0 * (1.0 - t_cur.total_time / t_off.total_time),
+                toppra_ratio: None,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// The rows as a fixed-width text table.
+pub fn format_table(rows: &[BenchRow]) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<17} {:>5} {:>7} {:>6} {:>6} | {:>9} {:>7} | {:>9} {:>7} {:>15} | {:>9} {:>7} | {:>7}",
+        "pocket", "L/D", "L mm", "tool", "step", "off mm", "off s", "curv mm", "curv s", "method",
+        "adapt mm", "adapt s", "save %"
+    );
+    for r in rows {
+        let (am, at) = match &r.adaptive {
+            Some(a) => (format!("{:.0}", a.length_mm), format!("{:.2}", a.time_s)),
+            None => ("-".into(), "-".into()),
+        };
+        let _ = writeln!(
+            s,
+            "{:<17} {:>5.1} {:>7.1} {:>6.2} {:>6.2} | {:>9.0} {:>7.2} | {:>9.0} {:>7.2} {:>15} | {:>9} {:>7} | {:>7.1}",
+            r.pocket,
+            r.l_over_d,
+            r.size_mm,
+            r.tool_mm,
+            r.stepover_mm,
+            r.offset.length_mm,
+            r.offset.time_s,
+            r.curvilinear.length_mm,
+            r.curvilinear.time_s,
+            r.curvilinear.method,
+            am,
+            at,
+            r.saving_pct
+        );
+    }
+    s
+}

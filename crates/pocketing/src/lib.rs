@@ -1,0 +1,229 @@
+//! Pocket tool paths for high-speed milling of thin-walled parts.
+//!
+//! * [`offset_path`]: the conventional parallel-offset baseline (cavalier_contours offsets of the
+//!   pocket by the tool radius, then inward by the stepover until empty; rings linked innermost
+//!   to outermost with short straight links, each ring counter-clockwise = down milling in a
+//!   pocket with an M3 spindle; the last ring is the finishing pass on the tool-offset boundary).
+//! * [`curvilinear_path`]: Bieterman & Sandstrom's curvilinear spiral: mesh the tool-offset
+//!   region, solve −Δu = 1 (or the principal Dirichlet eigenfunction) with linear finite
+//!   elements, pick contour levels outward from the maximum so that the measured gap between
+//!   successive contours never exceeds the stepover, spiral orbit to orbit by winding angle,
+//!   smooth, then finish on the offset boundary. Falls back to the offset path (reported as
+//!   [`Method::OffsetFallback`]) when a contour is not star-shaped about the centre, the region
+//!   splits or the pocket has islands.
+//! * [`bench::bench_pockets`]: both paths (and FreeCAD Adaptive when available) timed with the
+//!   project's feed schedule on a family of pockets over L/D.
+
+pub mod bench;
+pub mod contour;
+pub mod fem;
+pub mod geom;
+pub mod offset;
+pub mod spiral;
+pub mod svg;
+pub mod timing;
+
+use cavalier_contours::polyline::{PlineOrientation, PlineSource, Polyline};
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+pub use bench::{bench_pockets, BenchConfig, BenchRow};
+pub use fem::Field;
+pub use offset::offset_path;
+pub use spiral::curvilinear_path;
+pub use svg::pocket_svg;
+
+/// Errors of pocket path generation.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PocketError {
+    /// Tool, stepover or finishing stepover out of range.
+    BadParams(String),
+    /// The pocket profile is unusable (open, empty, self-intersecting …).
+    BadProfile(String),
+    /// The tool does not fit into the pocket.
+    ToolDoesNotFit,
+    /// Meshing failed.
+    Mesh(String),
+    /// The sparse solve failed.
+    Solver(String),
+}
+
+impl std::fmt::Display for PocketError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PocketError::BadParams(s) => write!(f, "bad pocketing parameters: {s}"),
+            PocketError::BadProfile(s) => write!(f, "bad pocket profile: {s}"),
+            PocketError::ToolDoesNotFit => write!(f, "the tool does not fit into the pocket"),
+            PocketError::Mesh(s) => write!(f, "meshing failed: {s}"),
+            PocketError::Solver(s) => write!(f, "PDE solve failed: {s}"),
+        }
+    }
+}
+
+impl std::error::Error for PocketError {}
+
+/// A closed pocket profile: outer boundary (lines and arcs as bulges) and optional islands.
+#[derive(Debug, Clone)]
+pub struct Pocket {
+    pub name: String,
+    pub outer: Polyline<f64>,
+    pub islands: Vec<Polyline<f64>>,
+}
+
+impl Pocket {
+    /// A pocket without islands. The outer loop is made counter-clockwise.
+    pub fn new(name: impl Into<String>, outer: Polyline<f64>) -> Self {
+        Self::with_islands(name, outer, Vec::new())
+    }
+
+    /// A pocket with islands; the outer loop is made counter-clockwise, islands clockwise.
+    pub fn with_islands(
+        name: impl Into<String>,
+        mut outer: Polyline<f64>,
+        mut islands: Vec<Polyline<f64>>,
+    ) -> Self {
+        use cavalier_contours::polyline::PlineSourceMut;
+        if outer.orientation() == PlineOrientation::Clockwise {
+            outer.invert_direction_mut();
+        }
+        for isl in &mut islands {
+            if isl.orientation() == PlineOrientation::CounterClockwise {
+                isl.invert_direction_mut();
+            }
+        }
+        Pocket {
+            name: name.into(),
+            outer,
+            islands,
+        }
+    }
+
+    /// Characteristic size L: the larger side of the outer loop's bounding box.
+    pub fn size(&self) -> f64 {
+        self.outer
+            .extents()
+            .map(|e| (e.max_x - e.min_x).max(e.max_y - e.min_y))
+            .unwrap_or(0.0)
+    }
+
+    fn validate(&self) -> Result<(), PocketError> {
+        if !self.outer.is_closed() || self.outer.vertex_count() < 2 {
+            return Err(PocketError::BadProfile(
+                "outer profile must be closed with ≥ 2 vertices".into(),
+            ));
+        }
+        if self.outer.area().abs() < 1e-9 {
+            return Err(PocketError::BadProfile("outer profile has zero area".into()));
+        }
+        Ok(())
+    }
+}
+
+/// Pocketing parameters (mm).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PocketParams {
+    /// Tool diameter.
+    pub tool_diameter: f64,
+    /// Maximum radial stepover of the roughing orbits (0 < stepover ≤ tool diameter).
+    pub stepover: f64,
+    /// Radial engagement of the finishing pass on the tool-offset boundary (0 ≤ f ≤ stepover).
+    pub finish_stepover: f64,
+    /// Target mesh edge length for the PDE; default stepover / 3.
+    pub mesh_size: Option<f64>,
+    /// PDE generating the contours.
+    pub field: Field,
+    /// Laplacian smoothing passes over the spiral (kept only if the gap stays ≤ stepover).
+    pub smoothing_passes: usize,
+}
+
+impl PocketParams {
+    /// Roughing stepover 40 % of the tool, finishing 10 %.
+    pub fn for_tool(tool_diameter: f64) -> Self {
+        PocketParams {
+            tool_diameter,
+            stepover: 0.4 * tool_diameter,
+            finish_stepover: 0.1 * tool_diameter,
+            mesh_size: None,
+            field: Field::Poisson,
+            smoothing_passes: 4,
+        }
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), PocketError> {
+        let d = self.tool_diameter;
+        if !(d.is_finite() && d > 0.0) {
+            return Err(PocketError::BadParams("tool diameter must be > 0".into()));
+        }
+        if !(self.stepover > 0.0 && self.stepover <= d) {
+            return Err(PocketError::BadParams(
+                "stepover must be in (0, tool diameter]".into(),
+            ));
+        }
+        if !(self.finish_stepover >= 0.0 && self.finish_stepover <= self.stepover) {
+            return Err(PocketError::BadParams(
+                "finishing stepover must be in [0, stepover]".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Point spacing used when sampling arcs and spirals for timing.
+    pub(crate) fn sample_step(&self) -> f64 {
+        (self.stepover / 4.0).min(self.tool_diameter / 8.0)
+    }
+}
+
+/// How a path was generated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    Offset,
+    Curvilinear,
+    OffsetFallback,
+}
+
+impl Method {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Method::Offset => "offset",
+            Method::Curvilinear => "curvilinear",
+            Method::OffsetFallback => "offset-fallback",
+        }
+    }
+}
+
+/// A pocketing tool path (tool-centre points in the pocket plane), roughing then finishing.
+#[derive(Debug, Clone)]
+pub struct PocketPath {
+    pub method: Method,
+    /// One continuous path: roughing orbits, then the finishing pass on the tool-offset
+    /// boundary, closed back to its start.
+    pub points: Vec<DVec2>,
+    /// Index in `points` where the finishing pass starts.
+    pub finish_start: usize,
+    /// Max measured gap between successive orbits / rings (symmetric Hausdorff distance).
+    pub max_gap: f64,
+    /// The contours (curvilinear) or offset rings (offset) the path was built from.
+    pub contours: Vec<Vec<DVec2>>,
+    /// Spiral centre (argmax u) for curvilinear paths.
+    pub center: Option<DVec2>,
+    /// Why the curvilinear method fell back to offsets.
+    pub fallback_reason: Option<String>,
+    /// The tool-offset boundary ∂Ω (finishing pass loop).
+    pub boundary: Vec<DVec2>,
+}
+
+impl PocketPath {
+    /// Path length (mm).
+    pub fn length(&self) -> f64 {
+        self.points.windows(2).map(|w| w[0].distance(w[1])).sum()
+    }
+
+    /// Largest distance between consecutive points.
+    pub fn max_step(&self) -> f64 {
+        self.points
+            .windows(2)
+            .map(|w| w[0].distance(w[1]))
+            .fold(0.0, f64::max)
+    }
+}

@@ -1,0 +1,345 @@
+//! Bieterman & Sandstrom's curvilinear spiral from contours of a PDE solution.
+
+use glam::DVec2;
+use std::f64::consts::TAU;
+
+use crate::contour::contour_loops;
+use crate::fem::{self, Mesh, Solution};
+use crate::geom::{loop_gap, perimeter, signed_area, SegIndex};
+use crate::offset::{append_loop_from_nearest, offset_loops, offset_path, sample_level};
+use crate::{Method, Pocket, PocketError, PocketParams, PocketPath};
+
+/// A closed loop, star-shaped about `c`, as a function of the winding angle.
+struct Polar {
+    c: DVec2,
+    /// angles relative to θ0, strictly increasing, in [0, 2π)
+    ang: Vec<f64>,
+    pts: Vec<DVec2>,
+}
+
+impl Polar {
+    /// `None` if the loop is not star-shaped about `c` (winding angle not strictly monotone or
+    /// winding number ≠ 1).
+    fn new(lp: &[DVec2], c: DVec2, theta0: f64) -> Option<Polar> {
+        let mut lp: Vec<DVec2> = lp.to_vec();
+        if signed_area(&lp) < 0.0 {
+            lp.reverse();
+        }
+        let n = lp.len();
+        if n < 3 {
+            return None;
+        }
+        let mut total = 0.0;
+        for i in 0..n {
+            let a = lp[i] - c;
+            let b = lp[(i + 1) % n] - c;
+            if a.length_squared() < 1e-24 || b.length_squared() < 1e-24 {
+                return None;
+            }
+            let d = a.perp_dot(b).atan2(a.dot(b));
+            if d <= 1e-12 {
+                return None;
+            }
+            total += d;
+        }
+        if (total - TAU).abs() > 1e-6 {
+            return None;
+        }
+        let rel = |p: DVec2| ((p - c).to_angle() - theta0).rem_euclid(TAU);
+        let start = (0..n)
+            .min_by(|&i, &j| rel(lp[i]).total_cmp(&rel(lp[j])))
+            .unwrap();
+        let pts: Vec<DVec2> = (0..n).map(|k| lp[(start + k) % n]).collect();
+        let mut ang = Vec::with_capacity(n);
+        let mut acc = rel(pts[0]);
+        ang.push(acc);
+        for k in 1..n {
+            let a = pts[k - 1] - c;
+            let b = pts[k] - c;
+            acc += a.perp_dot(b).atan2(a.dot(b));
+            ang.push(acc);
+        }
+        Some(Polar { c, ang, pts })
+    }
+
+    /// Radius along the ray at relative angle `t` ∈ [0, 2π] (θ0 + t absolute).
+    fn radius(&self, t: f64, theta0: f64) -> f64 {
+        let n = self.pts.len();
+        let t = t.rem_euclid(TAU);
+        // segment i: from pts[i] (ang[i]) to pts[i+1] (ang[i+1]), cyclic with +2π
+        let i = match self.ang.partition_point(|&a| a <= t) {
+            0 => n - 1,
+            k => k - 1,
+        };
+        let (a, b) = (self.pts[i], self.pts[(i + 1) % n]);
+        let dir = DVec2::from_angle(theta0 + t);
+        // c + r dir = a + s (b - a)
+        let ab = b - a;
+        let ca = a - self.c;
+        let den = dir.perp_dot(ab);
+        if den.abs() < 1e-300 {
+            return ca.length();
+        }
+        let r = ca.perp_dot(ab) / den;
+        r.max(0.0)
+    }
+
+    fn max_radius(&self) -> f64 {
+        self.pts
+            .iter()
+            .map(|p| p.distance(self.c))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Internal outcome of one spiral attempt.
+enum Attempt {
+    Ok(Box<PocketPath>),
+    Fallback(String),
+}
+
+/// Curvilinear pocketing. See the crate documentation; falls back to [`offset_path`] (method
+/// `offset-fallback`) where the winding-angle parameterisation is impossible.
+pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<PocketPath, PocketError> {
+    params.validate()?;
+    pocket.validate()?;
+    let fallback = |reason: String| -> Result<PocketPath, PocketError> {
+        let mut p = offset_path(pocket, params)?;
+        p.method = Method::OffsetFallback;
+        p.fallback_reason = Some(reason);
+        Ok(p)
+    };
+    if !pocket.islands.is_empty() {
+        return fallback("pocket has islands".into());
+    }
+    let r = params.tool_diameter / 2.0;
+    let f = params.finish_stepover;
+    let step = params.sample_step();
+    let finish = offset_loops(pocket, r);
+    if finish.is_empty() {
+        return Err(PocketError::ToolDoesNotFit);
+    }
+    if finish.len() > 1 {
+        return fallback("tool-offset region splits into several parts".into());
+    }
+    let rough = if f > 1e-9 {
+        offset_loops(pocket, r + f)
+    } else {
+        finish.clone()
+    };
+    if rough.len() != 1 {
+        return fallback("roughing region is empty or splits".into());
+    }
+    let boundary = sample_level(&finish, step).remove(0);
+    let rough_loop = sample_level(&rough, step).remove(0);
+    let h = params
+        .mesh_size
+        .unwrap_or(params.stepover / 3.0)
+        .min(perimeter(&rough_loop) / 24.0);
+    let mesh = Mesh::of_loop(&rough_loop, h)?;
+    let sol = fem::solve(&mesh, params.field)?;
+    let mut factor = 0.97;
+    let mut last = None;
+    for _ in 0..5 {
+        match attempt(params, &mesh, &sol, &rough_loop, &boundary, factor) {
+            Attempt::Fallback(reason) => return fallback(reason),
+            Attempt::Ok(p) => {
+                if p.max_gap <= params.stepover {
+                    return Ok(*p);
+                }
+                last = Some(p);
+                factor *= 0.9;
+            }
+        }
+    }
+    Ok(*last.expect("at least one attempt"))
+}
+
+fn attempt(
+    params: &PocketParams,
+    mesh: &Mesh,
+    sol: &Solution,
+    rough_loop: &[DVec2],
+    boundary: &[DVec2],
+    factor: f64,
+) -> Attempt {
+    let s = params.stepover;
+    let target = factor * s;
+    let step = params.sample_step();
+    let imax = (0..sol.u.len())
+        .max_by(|&a, &b| sol.u[a].total_cmp(&sol.u[b]))
+        .unwrap();
+    let c = mesh.vertices[imax];
+    // start the orbits on the ray towards the nearest point of the roughing boundary
+    let theta0 = {
+        let p = rough_loop
+            .iter()
+            .min_by(|a, b| a.distance_squared(c).total_cmp(&b.distance_squared(c)))
+            .unwrap();
+        (*p - c).to_angle()
+    };
+    let Some(terminal) = Polar::new(rough_loop, c, theta0) else {
+        return Attempt::Fallback("tool-offset boundary is not star-shaped about the centre".into());
+    };
+    // --- levels, outward from the maximum
+    let mut contours: Vec<Vec<DVec2>> = Vec::new();
+    let mut polars: Vec<Polar> = Vec::new();
+    let mut prev: Vec<DVec2> = vec![c];
+    let mut prev_level = 1.0;
+    loop {
+        if loop_gap(&prev, rough_loop) <= target {
+            break;
+        }
+        let single = |lvl: f64| -> Option<Vec<DVec2>> {
+            let mut l = contour_loops(mesh, &sol.u, lvl);
+            if l.len() == 1 {
+                l.pop()
+            } else {
+                None
+            }
+        };
+        let (mut lo, mut hi) = (0.0, prev_level);
+        let mut best: Option<(f64, Vec<DVec2>)> = None;
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            match single(mid) {
+                Some(lp) if loop_gap(&prev, &lp) <= target => {
+                    hi = mid;
+                    best = Some((mid, lp));
+                }
+                Some(_) => lo = mid,
+                None => {
+                    // several loops (several maxima) or none: only acceptable close to the top
+                    if mid > prev_level - 1e-9 {
+                        break;
+                    }
+                    lo = mid;
+                }
+            }
+            if hi - lo < 1e-6 {
+                break;
+            }
+        }
+        let Some((lvl, lp)) = best else {
+            return Attempt::Fallback(format!(
+                "no single contour within the stepover below level {prev_level:.4}"
+            ));
+        };
+        if prev_level - lvl < 1e-9 {
+            return Attempt::Fallback("contour levels stopped progressing".into());
+        }
+        let Some(pol) = Polar::new(&lp, c, theta0) else {
+            return Attempt::Fallback(format!(
+                "contour at level {lvl:.4} is not star-shaped about the centre"
+            ));
+        };
+        polars.push(pol);
+        contours.push(lp.clone());
+        prev = lp;
+        prev_level = lvl;
+    }
+    // --- orbits: centre → C1 → … → Cm → ∂Ω' (roughing boundary)
+    let mut radii: Vec<Box<dyn Fn(f64) -> f64 + '_>> = vec![Box::new(|_| 0.0)];
+    for p in &polars {
+        radii.push(Box::new(move |t| p.radius(t, theta0)));
+    }
+    let term = &terminal;
+    radii.push(Box::new(move |t| term.radius(t, theta0)));
+    let rmax: Vec<f64> = polars
+        .iter()
+        .map(|p| p.max_radius())
+        .chain(std::iter::once(terminal.max_radius()))
+        .collect();
+    let mut turns: Vec<Vec<DVec2>> = Vec::new();
+    for k in 0..radii.len() - 1 {
+        let n = ((TAU * rmax[k] / step).ceil() as usize).max(24);
+        let mut turn = Vec::with_capacity(n + 1);
+        for j in 0..=n {
+            let t = j as f64 / n as f64;
+            let th = TAU * t;
+            let rr = (1.0 - t) * radii[k](th) + t * radii[k + 1](th);
+            turn.push(c + rr * DVec2::from_angle(theta0 + th));
+        }
+        turns.push(turn);
+    }
+    // full orbit on the roughing boundary, starting where the spiral ends
+    let mut rough_turn = Vec::new();
+    rough_turn.push(*turns.last().unwrap().last().unwrap());
+    append_loop_from_nearest(&mut rough_turn, rough_loop);
+    // smoothing of the spiral orbits (end points fixed), kept only if the gap stays in bound
+    let raw_turns = turns.clone();
+    let gap_of = |turns: &[Vec<DVec2>]| -> f64 {
+        let mut g: f64 = 0.0;
+        let mut all: Vec<&[DVec2]> = turns.iter().map(|t| t.as_slice()).collect();
+        all.push(&rough_turn);
+        for w in all.windows(2) {
+            let ia = SegIndex::new(&[w[0]], false);
+            let ib = SegIndex::new(&[w[1]], false);
+            g = g.max(crate::geom::directed_gap(w[0], &ib));
+            g = g.max(crate::geom::directed_gap(w[1], &ia));
+        }
+        g
+    };
+    let raw_gap = gap_of(&raw_turns);
+    if params.smoothing_passes > 0 {
+        let mut flat: Vec<DVec2> = Vec::new();
+        let mut bounds = Vec::new();
+        for t in &turns {
+            let s0 = flat.len();
+            if s0 > 0 {
+                flat.pop(); // shared point between orbits
+            }
+            let s0 = flat.len();
+            flat.extend_from_slice(t);
+            bounds.push((s0, flat.len()));
+        }
+        for _ in 0..params.smoothing_passes {
+            let old = flat.clone();
+            // keep the last orbit's final tenth untouched so the spiral meets ∂Ω' exactly
+            let last_fixed = bounds.last().map(|&(a, b)| b - (b - a) / 10).unwrap_or(0);
+            for i in 1..flat.len() - 1 {
+                if i >= last_fixed {
+                    break;
+                }
+                let avg = 0.5 * (old[i - 1] + old[i + 1]);
+                flat[i] = old[i] + 0.5 * (avg - old[i]);
+            }
+        }
+        let smoothed: Vec<Vec<DVec2>> = bounds
+            .iter()
+            .map(|&(a, b)| flat[a..b].to_vec())
+            .collect();
+        let sg = gap_of(&smoothed);
+        if sg <= s || sg <= raw_gap {
+            turns = smoothed;
+        }
+    }
+    let max_gap = gap_of(&turns).max(params.finish_stepover);
+    // --- assemble: spiral, roughing boundary orbit, link, finishing pass on ∂Ω
+    let mut points: Vec<DVec2> = Vec::new();
+    for t in &turns {
+        for &p in t {
+            if points.last().is_none_or(|q: &DVec2| q.distance_squared(p) > 1e-18) {
+                points.push(p);
+            }
+        }
+    }
+    for &p in &rough_turn[1..] {
+        if points.last().is_none_or(|q: &DVec2| q.distance_squared(p) > 1e-18) {
+            points.push(p);
+        }
+    }
+    let finish_start = points.len();
+    append_loop_from_nearest(&mut points, boundary);
+    contours.push(rough_loop.to_vec());
+    Attempt::Ok(Box::new(PocketPath {
+        method: Method::Curvilinear,
+        points,
+        finish_start,
+        max_gap,
+        contours,
+        center: Some(c),
+        fallback_reason: None,
+        boundary: boundary.to_vec(),
+    }))
+}
