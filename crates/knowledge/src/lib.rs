@@ -5,6 +5,11 @@
 //! loaded and validated before planning; every problem found is reported
 //! with file, line and column, as many as can be found in one run.
 
+// Knowledge errors carry the file text for miette's pointed display; they are
+// rare and off the hot path, so their size does not matter.
+#![allow(clippy::result_large_err)]
+
+use std::collections::btree_map::Entry;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -166,14 +171,17 @@ impl Collector {
             Ok(item) => {
                 let key = id(&item).clone();
                 let k = self.k.as_mut().expect("present while collecting");
-                let m = map(k);
-                if m.contains_key(&key) {
-                    self.errors.push(KnowledgeError::Invalid {
+                match map(k).entry(key) {
+                    Entry::Occupied(e) => self.errors.push(KnowledgeError::Invalid {
                         path: path.to_path_buf(),
-                        reason: format!("duplicate id `{key}` (already defined by another file)"),
-                    });
-                } else {
-                    m.insert(key, item);
+                        reason: format!(
+                            "duplicate id `{}` (already defined by another file)",
+                            e.key()
+                        ),
+                    }),
+                    Entry::Vacant(e) => {
+                        e.insert(item);
+                    }
                 }
             }
             Err(e) => self.errors.push(e),
@@ -202,7 +210,7 @@ fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
     for m in k.machines.values() {
         let what = format!("machine `{}`", m.id);
         for (axis, a) in [("x", &m.x), ("y", &m.y), ("z", &m.z)] {
-            if !(a.travel.0 < a.travel.1) {
+            if a.travel.0.partial_cmp(&a.travel.1) != Some(std::cmp::Ordering::Less) {
                 errors.push(invalid(
                     &what,
                     format!(
