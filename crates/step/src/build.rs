@@ -251,7 +251,8 @@ struct Ctx<'x, 'a> {
     warned: HashSet<String>,
     /// Entities whose resolution is in progress (cycle detection).
     active: Vec<bool>,
-    depth: usize,
+    /// The entities being resolved, outermost first.
+    path: Vec<usize>,
     geo: Geo,
     unit_cache: HashMap<usize, Units>,
 }
@@ -363,14 +364,20 @@ impl<'x, 'a> Ctx<'x, 'a> {
     /// Marks `idx` as being resolved; errors on a cycle or too deep a chain.
     fn enter(&mut self, idx: usize, from: usize) -> R<()> {
         if self.active.get(idx).copied().unwrap_or(false) {
-            let id = self.ent(idx).map(|e| e.id).unwrap_or(0);
-            let fid = self.ent(from).map(|e| e.id).unwrap_or(0);
+            let id = |i: usize| self.ent(i).map(|e| e.id).unwrap_or(0);
+            let mut chain: Vec<String> = self
+                .path
+                .iter()
+                .skip_while(|&&p| p != idx)
+                .map(|&p| format!("#{}", id(p)))
+                .collect();
+            chain.push(format!("#{}", id(idx)));
             return Err(StepErrorKind::Cyclic {
                 place: place_of(self.ex, from),
-                chain: format!("#{fid} leads back to #{id}, which refers to it"),
+                chain: format!("references loop back: {}", chain.join(" -> ")),
             });
         }
-        if self.depth >= self.limits.max_depth {
+        if self.path.len() >= self.limits.max_depth {
             return Err(StepErrorKind::Limit {
                 place: place_of(self.ex, idx),
                 reason: format!("references nested deeper than {}", self.limits.max_depth),
@@ -379,7 +386,7 @@ impl<'x, 'a> Ctx<'x, 'a> {
         if let Some(a) = self.active.get_mut(idx) {
             *a = true;
         }
-        self.depth += 1;
+        self.path.push(idx);
         Ok(())
     }
 
@@ -387,7 +394,7 @@ impl<'x, 'a> Ctx<'x, 'a> {
         if let Some(a) = self.active.get_mut(idx) {
             *a = false;
         }
-        self.depth = self.depth.saturating_sub(1);
+        self.path.pop();
     }
 
     // ---------------------------------------------------------------- geometry
@@ -1599,7 +1606,7 @@ pub(crate) fn build(ex: &Exchange<'_>, limits: &Limits) -> R<Built> {
         warnings: Vec::new(),
         warned: HashSet::new(),
         active: vec![false; ex.entities.len()],
-        depth: 0,
+        path: Vec::new(),
         geo: Geo::new(&Units::mm()),
         unit_cache: HashMap::new(),
     };

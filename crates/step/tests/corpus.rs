@@ -112,6 +112,9 @@ fn mfcad_face_names_kept() {
     // The labels file maps face names to classes; every name is present.
     let labels = std::fs::read_to_string(path.with_extension("labels.json")).unwrap_or_default();
     for n in &names {
-        assert!(labels.contains(&format!("\"{n}\"")), "face name {n} not in labels");
+        assert!(
+            labels.contains(&format!("\"{n}\"")),
+            "face name {n} not in labels"
+        );
     }
 }
