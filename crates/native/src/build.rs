@@ -79,13 +79,8 @@ struct FaceOut {
     name: String,
 }
 
-fn seg_name(p: &PrismGeo, label: &str, k: usize, name: &Option<String>, circle: bool) -> String {
-    match (name, circle, label.is_empty()) {
-        (Some(n), _, _) => format!("{}.{}", p.id, n),
-        (None, true, _) => format!("{}.{}", p.id, label),
-        (None, false, true) => format!("{}.e{}", p.id, k),
-        (None, false, false) => format!("{}.{}.e{}", p.id, label, k),
-    }
+fn seg_name(p: &PrismGeo, name: &Option<String>) -> String {
+    format!("{}.{}", p.id, name.as_deref().unwrap_or("side"))
 }
 
 fn cyl_key_frame(origin: DVec3, axis: DVec3) -> Frame {
@@ -150,12 +145,12 @@ fn protos(prisms: &[PrismGeo], planes: &mut Vec<PlaneProto>, cyls: &mut Vec<CylP
                     h0,
                     h1,
                     prism: pi,
-                    name: seg_name(p, &l.label, 0, &None, true),
+                    name: seg_name(p, &l.names[0]),
                 });
                 continue;
             }
             for (k, s) in l.segs.iter().enumerate() {
-                let name = seg_name(p, &l.label, k, &l.names[k], false);
+                let name = seg_name(p, &l.names[k]);
                 if s.is_line() {
                     let (a0, b0) = (p.world(s.a, p.e0), p.world(s.b, p.e0));
                     let (a1, b1) = (p.world(s.a, p.e1), p.world(s.b, p.e1));

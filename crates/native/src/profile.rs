@@ -294,6 +294,22 @@ fn expand(c: &Contour, tol: f64, out: &mut Vec<NamedLoop>) -> Result<(), String>
     Ok(())
 }
 
+/// Fills in side names in the order the user wrote the contour: `e{k}`
+/// (outer) or `{label}.e{k}` (holes); a full circle is `side` or `{label}`.
+fn name_sides(l: &mut NamedLoop) {
+    let label = l.label.clone();
+    for (k, n) in l.names.iter_mut().enumerate() {
+        if n.is_none() {
+            *n = Some(match (l.circle, label.is_empty()) {
+                (true, true) => "side".to_string(),
+                (true, false) => label.clone(),
+                (false, true) => format!("e{k}"),
+                (false, false) => format!("{label}.e{k}"),
+            });
+        }
+    }
+}
+
 fn loops_touch(a: &[Seg], b: &[Seg], tol: f64) -> bool {
     for s in a {
         let (alo, ahi) = s.bounds();
@@ -347,6 +363,7 @@ pub fn build_region(p: &Profile, tol: f64) -> Result<Region2, String> {
         return Err("the outer contour must be a single loop (no Repeat)".into());
     }
     let mut outer = outer.pop().expect("one loop");
+    name_sides(&mut outer);
     check_loop(&outer, "outer contour", tol)?;
     if loop_area(&outer.segs) < 0.0 {
         outer.reverse();
@@ -362,6 +379,7 @@ pub fn build_region(p: &Profile, tol: f64) -> Result<Region2, String> {
             } else {
                 format!("h{j}.{k}")
             };
+            name_sides(&mut l);
             holes.push((j, l));
         }
     }
