@@ -127,7 +127,10 @@ pub enum Surface {
         weights: Vec<Vec<f64>>,
     },
     /// A curve swept along a direction (`SURFACE_OF_LINEAR_EXTRUSION`).
-    Extrusion { curve: Box<Curve>, dir: DVec3 },
+    Extrusion {
+        curve: Box<Curve>,
+        dir: DVec3,
+    },
     /// A curve revolved about an axis (`SURFACE_OF_REVOLUTION`).
     Revolution {
         curve: Box<Curve>,
@@ -135,7 +138,9 @@ pub enum Surface {
         axis_dir: DVec3,
     },
     /// A surface kind the reader keeps only by name (offset surfaces …).
-    Other { kind: String },
+    Other {
+        kind: String,
+    },
 }
 
 impl Curve {

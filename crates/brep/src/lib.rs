@@ -11,10 +11,20 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 pub mod adjacency;
+pub mod eval;
 pub mod geom;
+pub mod mass;
+#[cfg(test)]
+mod proptests;
+pub mod sample;
+pub mod tess;
+#[cfg(any(test, feature = "test-shapes"))]
+pub mod test_shapes;
 
-pub use adjacency::{Convexity, EdgeAdjacency};
+pub use adjacency::{edge_adjacency, face_neighbours, Convexity, EdgeAdjacency};
 pub use geom::{Curve, Frame, Surface};
+pub use mass::MassProperties;
+pub use tess::{tessellate, tessellate_face, Mesh, TessError, TessTolerance};
 
 /// Index of a vertex in [`Brep::vertices`].
 pub type VertexId = usize;
@@ -269,18 +279,20 @@ impl Brep {
             curve: e.curve.clone(),
             same_sense: e.same_sense,
         }));
-        self.loops.extend(other.loops.iter().map(|l| Loop {
-            coedges: l
-                .coedges
-                .iter()
-                .map(|c| Coedge {
-                    edge: c.edge + e0,
-                    forward: c.forward,
-                })
-                .collect(),
-            vertex: l.vertex.map(|v| v + v0),
-            orientation: l.orientation,
-            outer: l.outer,
+        self.loops.extend(other.loops.iter().map(|l| {
+            Loop {
+                coedges: l
+                    .coedges
+                    .iter()
+                    .map(|c| Coedge {
+                        edge: c.edge + e0,
+                        forward: c.forward,
+                    })
+                    .collect(),
+                vertex: l.vertex.map(|v| v + v0),
+                orientation: l.orientation,
+                outer: l.outer,
+            }
         }));
         self.faces.extend(other.faces.iter().map(|f| Face {
             surface: f.surface.clone(),
