@@ -1567,17 +1567,13 @@ impl<'x, 'a> Assembler<'x, 'a> {
         self.c.tick(1, rep)?;
         let identity = m == DMat4::IDENTITY;
         let b = self.rep_brep(rep)?;
-        let size = (b.vertices.len() + b.edges.len() + b.faces.len() + b.loops.len()) as u64;
+        let coedges: usize = b.loops.iter().map(|l| l.coedges.len()).sum();
+        let size =
+            (b.vertices.len() + b.edges.len() + b.faces.len() + b.loops.len() + coedges) as u64;
         if !b.faces.is_empty() || !b.solids.is_empty() {
             self.c.tick(size, rep)?;
             if let Some(b) = self.cache.get(&rep) {
-                if identity {
-                    self.out.append(b);
-                } else {
-                    let mut b = b.clone();
-                    b.transform(&m);
-                    self.out.append(&b);
-                }
+                append_transformed(&mut self.out, b, (!identity).then_some(&m));
             }
         }
         let kids = self.links.get(&rep).cloned().unwrap_or_default();
@@ -1595,6 +1591,23 @@ impl<'x, 'a> Assembler<'x, 'a> {
             self.expand(l.child, m * local, depth + 1)?;
         }
         Ok(())
+    }
+}
+
+/// Appends `b` to `out`, transforming only the appended part.
+fn append_transformed(out: &mut Brep, b: &Brep, m: Option<&DMat4>) {
+    let (v0, e0, f0) = (out.vertices.len(), out.edges.len(), out.faces.len());
+    out.append(b);
+    if let Some(m) = m {
+        for v in &mut out.vertices[v0..] {
+            v.point = m.transform_point3(v.point);
+        }
+        for e in &mut out.edges[e0..] {
+            e.curve.transform(m);
+        }
+        for f in &mut out.faces[f0..] {
+            f.surface.transform(m);
+        }
     }
 }
 

@@ -49,7 +49,7 @@ impl Default for Limits {
             max_bytes: 512 << 20,
             max_entities: 20_000_000,
             max_depth: 128,
-            max_work: 2_000_000_000,
+            max_work: 500_000_000,
         }
     }
 }
