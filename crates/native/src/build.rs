@@ -307,14 +307,22 @@ fn plane_faces(
                 ArrangeError::Topology(s) => err_shell(origin, s),
             })?;
             for f in faces {
-                let name = f
+                // Merged faces carry every contributing name, in prism order.
+                let mut contrib: Vec<usize> = f
                     .cover
                     .iter()
                     .filter(|&&r| regions[r].class == class)
                     .map(|&r| g.members[r])
-                    .min()
-                    .map(|m| protos[m].name.clone())
-                    .unwrap_or_default();
+                    .collect();
+                contrib.sort_unstable();
+                contrib.dedup();
+                let mut names: Vec<&str> = Vec::new();
+                for m in contrib {
+                    if !names.contains(&protos[m].name.as_str()) {
+                        names.push(&protos[m].name);
+                    }
+                }
+                let name = names.join("+");
                 let sign = if class == 0 { 1.0 } else { -1.0 };
                 let mut loops = Vec::new();
                 for l in std::iter::once(&f.outer).chain(f.holes.iter()) {
