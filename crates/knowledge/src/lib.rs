@@ -15,9 +15,11 @@ use std::path::{Path, PathBuf};
 
 pub mod load;
 pub mod resources;
+pub mod sizing;
 
 pub use load::{load_ron, parse_ron, KnowledgeError};
 pub use resources::*;
+pub use sizing::*;
 
 /// All knowledge a plan uses, by id (ordered maps: deterministic).
 #[derive(Debug, Clone, PartialEq)]
@@ -27,6 +29,10 @@ pub struct Knowledge {
     pub machines: BTreeMap<String, Machine>,
     pub tool_sets: BTreeMap<String, ToolSet>,
     pub materials: BTreeMap<String, Material>,
+    /// Constants of the wall sizing model (`sizing.ron` at the knowledge
+    /// root). A directory without `sizing.ron` gets the embedded copy, the
+    /// table A.2 defaults ("used when no other value is passed in").
+    pub sizing: SizingKnowledge,
 }
 
 /// The embedded copy of the repository's `knowledge/` directory:
@@ -44,7 +50,14 @@ const BUILTIN: &[(&str, &str)] = &[
         "materials/al7075.ron",
         include_str!("../../../knowledge/materials/al7075.ron"),
     ),
+    ("sizing.ron", BUILTIN_SIZING),
 ];
+
+/// The embedded `knowledge/sizing.ron`.
+const BUILTIN_SIZING: &str = include_str!("../../../knowledge/sizing.ron");
+
+/// The name of the sizing file at the knowledge root.
+pub const SIZING_FILE: &str = "sizing.ron";
 
 /// Default resources when a set-up names none.
 pub const DEFAULT_MACHINE: &str = "hsm_5axis";
@@ -93,6 +106,16 @@ impl Knowledge {
                 Err(e) => errors.push(e),
             }
         }
+        let sizing = dir.join(SIZING_FILE);
+        if sizing.exists() {
+            match std::fs::read_to_string(&sizing) {
+                Ok(t) => files.push((sizing, t)),
+                Err(e) => errors.push(KnowledgeError::Read {
+                    path: sizing,
+                    reason: e.to_string(),
+                }),
+            }
+        }
         match Self::from_files(&dir.display().to_string(), &files) {
             Ok(k) if errors.is_empty() => Ok(k),
             Ok(_) => Err(errors),
@@ -105,26 +128,61 @@ impl Knowledge {
 
     /// Builds knowledge from `(path, text)` pairs; the first path component
     /// below the knowledge root (`machines`, `tools`, `materials`) says what
-    /// a file holds.
+    /// a file holds; `sizing.ron` outside those folders is the sizing
+    /// knowledge (the embedded one when no such file is given).
     pub fn from_files(
         origin: &str,
         files: &[(PathBuf, String)],
     ) -> Result<Knowledge, Vec<KnowledgeError>> {
-        let mut c = Collector {
-            k: Some(Knowledge {
-                origin: origin.to_string(),
-                machines: BTreeMap::new(),
-                tool_sets: BTreeMap::new(),
-                materials: BTreeMap::new(),
-            }),
-            errors: Vec::new(),
-        };
+        let mut sizing: Option<SizingKnowledge> = None;
+        let mut sizing_errors = Vec::new();
+        let mut rest = Vec::new();
         for (path, text) in files {
             let parent = path
                 .parent()
                 .and_then(|p| p.file_name())
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
+            let is_sizing = path.file_name().is_some_and(|n| n == SIZING_FILE)
+                && !matches!(parent.as_str(), "machines" | "tools" | "materials");
+            if !is_sizing {
+                rest.push((path, text, parent));
+            } else if sizing.is_some() {
+                sizing_errors.push(KnowledgeError::Invalid {
+                    path: path.clone(),
+                    reason: "a second sizing.ron".into(),
+                });
+            } else {
+                match parse_ron::<SizingKnowledge>(text, path) {
+                    Ok(s) => sizing = Some(s),
+                    Err(e) => sizing_errors.push(e),
+                }
+            }
+        }
+        let sizing = match sizing {
+            Some(s) => s,
+            None => match parse_ron::<SizingKnowledge>(
+                BUILTIN_SIZING,
+                Path::new("builtin:knowledge/sizing.ron"),
+            ) {
+                Ok(s) => s,
+                Err(e) => {
+                    sizing_errors.push(e);
+                    return Err(sizing_errors);
+                }
+            },
+        };
+        let mut c = Collector {
+            k: Some(Knowledge {
+                origin: origin.to_string(),
+                machines: BTreeMap::new(),
+                tool_sets: BTreeMap::new(),
+                materials: BTreeMap::new(),
+                sizing,
+            }),
+            errors: sizing_errors,
+        };
+        for (path, text, parent) in rest {
             match parent.as_str() {
                 "machines" => c.add(path, text, |k| &mut k.machines, |m: &Machine| &m.id),
                 "tools" => c.add(path, text, |k| &mut k.tool_sets, |t: &ToolSet| &t.id),
@@ -280,6 +338,9 @@ fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
                 ));
             }
         }
+    }
+    for problem in k.sizing.problems() {
+        errors.push(invalid("sizing knowledge (sizing.ron)", problem));
     }
     for m in k.materials.values() {
         let what = format!("material `{}`", m.id);

@@ -13,6 +13,7 @@ fn repository_knowledge_loads_and_equals_the_embedded_copy() {
     assert_eq!(dir.machines, builtin.machines);
     assert_eq!(dir.tool_sets, builtin.tool_sets);
     assert_eq!(dir.materials, builtin.materials);
+    assert_eq!(dir.sizing, builtin.sizing);
     assert!(dir.machine(DEFAULT_MACHINE).is_some());
     let tools = dir.tool_set(DEFAULT_TOOL_SET).unwrap();
     let mut diameters: Vec<f64> = tools.tools.iter().map(|t| t.diameter).collect();
@@ -34,6 +35,7 @@ fn copy_of_knowledge(tag: &str) -> PathBuf {
             std::fs::copy(&p, d.join(sub).join(p.file_name().unwrap())).unwrap();
         }
     }
+    std::fs::copy(repo_knowledge().join(SIZING_FILE), d.join(SIZING_FILE)).unwrap();
     d
 }
 
@@ -109,4 +111,98 @@ fn machine_reach_follows_its_kinematics() {
     m.kinematics = Kinematics::ThreeAxis;
     assert!(m.reaches(glam::DVec3::Z));
     assert!(!m.reaches(side));
+}
+
+#[test]
+fn sizing_holds_the_table_a2_constants() {
+    let s = Knowledge::load_dir(&repo_knowledge()).unwrap().sizing;
+    assert_eq!(s.allowed_deflection, 0.01);
+    assert_eq!(s.effective_length_factor, 4.0);
+    assert_eq!(s.max_milling_force, 200.0);
+    assert_eq!(s.preferred_tool_diameter, 12.0);
+    assert_eq!(s.initial_height_ratio, 2);
+    let p = &s.peripheral;
+    assert_eq!(p.danger_zone_factor, 0.75);
+    assert_eq!(p.finishing_width_of_cut, 2.0);
+    assert_eq!(p.roughing_stepover, 0.75);
+    assert_eq!(p.finishing_depth_of_cut, 1.5);
+    assert_eq!(p.initial_finishing_cuts_in_h, 8);
+    assert_eq!(p.min_cuts_in_width, 2);
+    let f = &s.face;
+    assert_eq!(f.danger_zone_factor, 0.5);
+    assert_eq!(f.finishing_depth_of_cut, 2.0);
+    assert_eq!(f.roughing_depth_of_cut, 4.0);
+    assert_eq!(
+        f.finishing_width_of_cut_factor * 12.0 + f.finishing_width_of_cut_extra,
+        7.0
+    );
+    assert_eq!(f.initial_finishing_cuts_in_h, 3);
+    assert_eq!(f.min_cuts_in_width, 3);
+    assert!(s.tall_wall.is_some());
+    assert!(s.problems().is_empty(), "{:?}", s.problems());
+}
+
+#[test]
+fn bad_sizing_values_are_refused_with_clear_messages() {
+    let d = copy_of_knowledge("sizing-values");
+    let f = d.join(SIZING_FILE);
+    let text = std::fs::read_to_string(&f).unwrap();
+    let text = text
+        .replace("allowed_deflection: 0.01", "allowed_deflection: -0.01")
+        .replace("roughing_stepover: 0.75", "roughing_stepover: 1.5")
+        .replace("max_big_h_over_h: 3.0", "max_big_h_over_h: 1.5");
+    std::fs::write(&f, text).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    let all: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+    assert_eq!(all.len(), 3, "{all:?}");
+    assert!(
+        all.iter()
+            .any(|m| m.contains("`allowed_deflection` must be a positive number")),
+        "{all:?}"
+    );
+    assert!(
+        all.iter()
+            .any(|m| m.contains("`peripheral.roughing_stepover`") && m.contains("(0, 1]")),
+        "{all:?}"
+    );
+    assert!(
+        all.iter()
+            .any(|m| m.contains("`initial_height_ratio` (2) exceeds")),
+        "{all:?}"
+    );
+    assert!(all.iter().all(|m| m.contains("sizing")), "{all:?}");
+}
+
+#[test]
+fn sizing_syntax_and_unknown_fields_point_at_the_file() {
+    let d = copy_of_knowledge("sizing-syntax");
+    let f = d.join(SIZING_FILE);
+    let text = std::fs::read_to_string(&f).unwrap();
+    std::fs::write(&f, text.replace("max_milling_force", "max_miling_force")).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    let msg = errors[0].to_string();
+    assert!(
+        msg.contains("max_miling_force") && msg.contains("sizing.ron:"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn a_directory_without_sizing_gets_the_embedded_defaults() {
+    let d = copy_of_knowledge("sizing-absent");
+    std::fs::remove_file(d.join(SIZING_FILE)).unwrap();
+    let k = Knowledge::load_dir(&d).unwrap();
+    assert_eq!(k.sizing, Knowledge::builtin().unwrap().sizing);
+}
+
+#[test]
+fn tall_wall_rule_reads_the_test_10_remark() {
+    let rule = Knowledge::builtin().unwrap().sizing.tall_wall.unwrap();
+    // 48 mm wall, h = 12: not tall, H = 4·h allowed.
+    assert!(rule.allows(48.0, 12.0, 48.0));
+    // 72 mm wall, h = 12: tall; H = 36 (3·h) allowed, H = 48 (4·h) not.
+    assert!(rule.allows(72.0, 12.0, 36.0));
+    assert!(!rule.allows(72.0, 12.0, 48.0));
+    // H = H_w is left to the bending model.
+    assert!(rule.allows(60.0, 12.0, 60.0));
 }
