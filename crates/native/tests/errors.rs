@@ -257,3 +257,23 @@ proptest! {
         let _ = build(&s);
     }
 }
+
+#[test]
+fn floor_fillet_prism_merges_with_rib_ends() {
+    // A square-minus-quarter-circle prism along the foot of the rib.
+    let text = GOOD.replace(
+        "    ],\n)",
+        r#"        Prism(id: "fillet", frame: (x_dir: (0.0, 1.0, 0.0), y_dir: (0.0, 0.0, 1.0)), extent: (10.0, 90.0),
+              profile: (outer: Path(start: (26.0, 2.0), segments: [Line(to: (29.0, 2.0)),
+                  Arc(to: (26.0, 5.0), centre: (29.0, 5.0), ccw: false, name: "round"), Line(to: (26.0, 2.0))]))),
+    ],
+)"#,
+    );
+    let b = build(&text).unwrap();
+    let c = b.face_kind_counts();
+    // web 6 + rib 5 (its two ends merged with the fillet's caps) = 11 planes.
+    assert_eq!((c.plane, c.cylinder), (11, 1));
+    let round = b.faces.iter().find(|f| f.name == "fillet.round").unwrap();
+    assert!(!round.same_sense, "a concave fillet faces its axis");
+    assert!(b.faces.iter().any(|f| f.name == "rib.e1+fillet.top"));
+}
