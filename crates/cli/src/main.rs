@@ -1,1 +1,475 @@
-fn main() {}
+//! `thinplan`: the headless driver of the planning stages.
+//!
+//! A thin shell: it parses arguments, calls the stage crates in pipeline
+//! order and prints results. No planning logic lives here.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use thinplan_import::{ImportError, ImportedPart};
+use thinplan_knowledge::Knowledge;
+use thinplan_plan::{Plan, Provenance, ProvenanceSource, Setup};
+
+/// Exit codes (documented in docs/CLI.md).
+mod exit {
+    pub const OK: u8 = 0;
+    pub const INTERNAL: u8 = 1;
+    // 2 is clap's usage error.
+    pub const BAD_INPUT: u8 = 3;
+    pub const KNOWLEDGE: u8 = 4;
+    pub const OUTPUT: u8 = 5;
+}
+
+#[derive(Parser)]
+#[command(
+    name = "thinplan",
+    version,
+    about = "Process planning for high-speed milling of thin-walled parts"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Read a part (STEP or native .part.ron) and report its B-rep.
+    Inspect {
+        /// Part file, or builtin:NAME for a bundled sample.
+        part: String,
+        /// Print one JSON object (the documented contract) instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Plan a part through every stage built so far and write the plan file.
+    Plan {
+        /// Part file, or builtin:NAME; a bundled sample when omitted.
+        part: Option<String>,
+        /// Where to write the plan (default: out/NAME.plan.json).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// The spindle axis in part coordinates, "x,y,z" (default 0,0,1).
+        #[arg(long, default_value = "0,0,1")]
+        up: String,
+        /// Machine id (from the knowledge's machines/).
+        #[arg(long, default_value = thinplan_knowledge::DEFAULT_MACHINE)]
+        machine: String,
+        /// Tool set id (from the knowledge's tools/).
+        #[arg(long, default_value = thinplan_knowledge::DEFAULT_TOOL_SET)]
+        tools: String,
+        /// Material id (from the knowledge's materials/).
+        #[arg(long, default_value = thinplan_knowledge::DEFAULT_MATERIAL)]
+        material: String,
+        /// Knowledge directory (default: the knowledge built into thinplan).
+        #[arg(long)]
+        knowledge: Option<PathBuf>,
+        /// Machine-readable summary on stdout; no progress output.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Load and validate a knowledge directory; list every problem found.
+    CheckKnowledge {
+        /// The directory (default: the knowledge built into thinplan).
+        dir: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// List the bundled sample parts.
+    Samples,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let json = matches!(
+        cli.command,
+        Command::Inspect { json: true, .. }
+            | Command::Plan { json: true, .. }
+            | Command::CheckKnowledge { json: true, .. }
+    );
+    let result = std::panic::catch_unwind(|| run(cli.command)).unwrap_or_else(|_| {
+        Err(CliError {
+            code: exit::INTERNAL,
+            kind: "internal",
+            message: "internal error (a bug in thinplan; please report it with the input)".into(),
+        })
+    });
+    finish(result, json)
+}
+
+fn run(command: Command) -> Result<(), CliError> {
+    match command {
+        Command::Inspect { part, json } => inspect(&part, json),
+        Command::Plan {
+            part,
+            out,
+            up,
+            machine,
+            tools,
+            material,
+            knowledge,
+            json,
+        } => plan(
+            part,
+            out,
+            SetupArgs {
+                up: &up,
+                machine,
+                tools,
+                material,
+            },
+            knowledge.as_deref(),
+            json,
+        ),
+        Command::CheckKnowledge { dir, json } => check_knowledge(dir.as_deref(), json),
+        Command::Samples => {
+            for (name, _) in thinplan_import::SAMPLES {
+                println!("builtin:{name}");
+            }
+            Ok(())
+        }
+    }
+}
+
+fn finish(result: Result<(), CliError>, json: bool) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::from(exit::OK),
+        Err(e) => {
+            // An empty message means the command already reported its errors.
+            if e.message.is_empty() {
+            } else if json {
+                let v = serde_json::json!({ "error": e.message, "kind": e.kind });
+                println!("{v}");
+            } else {
+                eprintln!("error: {}", e.message);
+            }
+            ExitCode::from(e.code)
+        }
+    }
+}
+
+struct CliError {
+    code: u8,
+    kind: &'static str,
+    message: String,
+}
+
+impl From<ImportError> for CliError {
+    fn from(e: ImportError) -> Self {
+        CliError {
+            code: exit::BAD_INPUT,
+            kind: "input",
+            message: error_chain(&e),
+        }
+    }
+}
+
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut src = e.source();
+    while let Some(inner) = src {
+        let t = inner.to_string();
+        if !s.contains(&t) {
+            s.push_str(": ");
+            s.push_str(&t);
+        }
+        src = inner.source();
+    }
+    s
+}
+
+/// The `inspect --json` contract (docs/CLI.md).
+#[derive(Serialize)]
+struct InspectReport {
+    solids: usize,
+    faces: usize,
+    faces_by_kind: thinplan_brep::FaceKindCounts,
+    bbox: [f64; 3],
+    volume: f64,
+    units: String,
+}
+
+fn inspect(part: &str, json: bool) -> Result<(), CliError> {
+    let imported = thinplan_import::import(part)?;
+    let s = &imported.part.summary;
+    let report = InspectReport {
+        solids: s.solids,
+        faces: s.faces,
+        faces_by_kind: imported.brep.face_kind_counts(),
+        bbox: s.bbox,
+        volume: s.volume,
+        units: imported.part.declared_units.clone(),
+    };
+    if json {
+        println!("{}", serde_json::to_string(&report).expect("serialises"));
+    } else {
+        let k = &report.faces_by_kind;
+        println!("part     {part}");
+        println!("units    {} (geometry in mm)", report.units);
+        println!("solids   {}", report.solids);
+        println!(
+            "faces    {} (plane {}, cylinder {}, cone {}, sphere {}, torus {}, bspline {}, other {})",
+            report.faces, k.plane, k.cylinder, k.cone, k.sphere, k.torus, k.bspline, k.other
+        );
+        println!(
+            "extent   {:.3} x {:.3} x {:.3} mm",
+            report.bbox[0], report.bbox[1], report.bbox[2]
+        );
+        println!("volume   {:.3} mm3", report.volume);
+        for w in &imported.warnings {
+            println!("warning  {w}");
+        }
+    }
+    Ok(())
+}
+
+fn parse_up(up: &str) -> Result<glam::DVec3, CliError> {
+    let bad = || CliError {
+        code: exit::BAD_INPUT,
+        kind: "input",
+        message: format!("--up `{up}`: expected three numbers x,y,z, not all zero"),
+    };
+    let v: Vec<f64> = up
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
+        return Err(bad());
+    }
+    glam::DVec3::new(v[0], v[1], v[2])
+        .try_normalize()
+        .ok_or_else(bad)
+}
+
+#[derive(Serialize)]
+struct PlanReport<'a> {
+    part: &'a str,
+    plan_file: String,
+    stages_done: &'a [thinplan_plan::Stage],
+    solids: usize,
+    faces: usize,
+    volume: f64,
+    stiffness_features: usize,
+    machining_features: usize,
+    operations: usize,
+    warnings: &'a [String],
+}
+
+struct SetupArgs<'a> {
+    up: &'a str,
+    machine: String,
+    tools: String,
+    material: String,
+}
+
+fn load_knowledge(dir: Option<&Path>) -> Result<Knowledge, CliError> {
+    let result = match dir {
+        Some(d) => Knowledge::load_dir(d),
+        None => Knowledge::builtin(),
+    };
+    result.map_err(|errors| CliError {
+        code: exit::KNOWLEDGE,
+        kind: "knowledge",
+        message: errors
+            .iter()
+            .map(|e| e.to_string())
+            .collect::<Vec<_>>()
+            .join("\n"),
+    })
+}
+
+fn check_knowledge(dir: Option<&Path>, json: bool) -> Result<(), CliError> {
+    let result = match dir {
+        Some(d) => Knowledge::load_dir(d),
+        None => Knowledge::builtin(),
+    };
+    match result {
+        Ok(k) => {
+            if json {
+                let v = serde_json::json!({
+                    "origin": k.origin,
+                    "machines": k.machines.keys().collect::<Vec<_>>(),
+                    "tool_sets": k.tool_sets.keys().collect::<Vec<_>>(),
+                    "materials": k.materials.keys().collect::<Vec<_>>(),
+                    "errors": [],
+                });
+                println!("{v}");
+            } else {
+                println!(
+                    "{}: ok ({} machine(s), {} tool set(s), {} material(s))",
+                    k.origin,
+                    k.machines.len(),
+                    k.tool_sets.len(),
+                    k.materials.len()
+                );
+            }
+            Ok(())
+        }
+        Err(errors) => {
+            if json {
+                let list: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+                println!("{}", serde_json::json!({ "errors": list }));
+            } else {
+                for e in errors {
+                    eprintln!("{:?}", miette::Report::new(e));
+                }
+            }
+            Err(CliError {
+                code: exit::KNOWLEDGE,
+                kind: "knowledge",
+                message: String::new(),
+            })
+        }
+    }
+}
+
+/// Checks the set-up against the knowledge: the resources exist and the
+/// machine can reach the spindle direction.
+fn make_setup(args: &SetupArgs, k: &Knowledge) -> Result<Setup, CliError> {
+    let up = parse_up(args.up)?;
+    let missing = |what: &str, id: &str, known: Vec<&String>| CliError {
+        code: exit::KNOWLEDGE,
+        kind: "knowledge",
+        message: format!(
+            "set-up: no {what} `{id}` in {} (known: {})",
+            k.origin,
+            known
+                .iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    k.machine(&args.machine)
+        .ok_or_else(|| missing("machine", &args.machine, k.machines.keys().collect()))?;
+    k.tool_set(&args.tools)
+        .ok_or_else(|| missing("tool set", &args.tools, k.tool_sets.keys().collect()))?;
+    k.material(&args.material)
+        .ok_or_else(|| missing("material", &args.material, k.materials.keys().collect()))?;
+    Ok(Setup {
+        up,
+        machine: args.machine.clone(),
+        tool_set: args.tools.clone(),
+        material: args.material.clone(),
+        provenance: Provenance::new(ProvenanceSource::User, "cli.setup")
+            .with_value("up_x", up.x)
+            .with_value("up_y", up.y)
+            .with_value("up_z", up.z),
+    })
+}
+
+/// An impossible set-up is refused: the part, placed with `up` along the
+/// machine's z, must fit in the axis travel (checked on the corners of its
+/// box, which over-estimates a rotated part slightly: the safe side).
+fn check_fits(part: &thinplan_plan::PartRef, setup: &Setup, k: &Knowledge) -> Result<(), CliError> {
+    let m = k.machine(&setup.machine).expect("checked in make_setup");
+    let frame = thinplan_brep::Frame::from_axis_ref(glam::DVec3::ZERO, setup.up, None);
+    let b = part.summary.bbox;
+    let mut ext = [0.0f64; 3];
+    for (i, axis) in [frame.x, frame.y, frame.z].iter().enumerate() {
+        ext[i] = b[0] * axis.x.abs() + b[1] * axis.y.abs() + b[2] * axis.z.abs();
+    }
+    for (i, (name, a)) in [("x", &m.x), ("y", &m.y), ("z", &m.z)].iter().enumerate() {
+        let travel = a.travel.1 - a.travel.0;
+        if ext[i] > travel {
+            return Err(CliError {
+                code: exit::KNOWLEDGE,
+                kind: "setup",
+                message: format!(
+                    "impossible set-up: the part is {:.1} mm along machine {name} but machine `{}` travels {:.1} mm",
+                    ext[i], m.id, travel
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn plan(
+    part: Option<String>,
+    out: Option<PathBuf>,
+    setup_args: SetupArgs,
+    knowledge_dir: Option<&Path>,
+    json: bool,
+) -> Result<(), CliError> {
+    let source = part.unwrap_or_else(|| format!("builtin:{}", thinplan_import::DEFAULT_SAMPLE));
+    let knowledge = load_knowledge(knowledge_dir)?;
+    // Validate the set-up before the (possibly long) import.
+    let setup = make_setup(&setup_args, &knowledge)?;
+    let progress = if json {
+        ProgressBar::hidden()
+    } else {
+        // Draws only when stderr is a terminal.
+        ProgressBar::new(2).with_style(
+            ProgressStyle::with_template("{spinner} [{pos}/{len}] {msg}").expect("valid template"),
+        )
+    };
+    progress.set_message(format!("import {source}"));
+    let ImportedPart { part, warnings, .. } = thinplan_import::import(&source)?;
+    progress.inc(1);
+    progress.set_message("set-up");
+    check_fits(&part, &setup, &knowledge)?;
+    let mut plan = Plan::new(part, setup);
+    plan.notes
+        .insert("knowledge".into(), knowledge.origin.clone());
+    plan.notes
+        .insert("thinplan_version".into(), env!("CARGO_PKG_VERSION").into());
+    progress.inc(1);
+    progress.finish_and_clear();
+
+    let out = out.unwrap_or_else(|| default_out(&source));
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| CliError {
+            code: exit::OUTPUT,
+            kind: "output",
+            message: format!("{}: cannot create directory: {e}", dir.display()),
+        })?;
+    }
+    thinplan_plan::save(&plan, &out).map_err(|e| CliError {
+        code: exit::OUTPUT,
+        kind: "output",
+        message: error_chain(&e),
+    })?;
+    let report = PlanReport {
+        part: &source,
+        plan_file: out.display().to_string(),
+        stages_done: &plan.stages_done,
+        solids: plan.part.summary.solids,
+        faces: plan.part.summary.faces,
+        volume: plan.part.summary.volume,
+        stiffness_features: plan.stiffness_features.len(),
+        machining_features: plan.machining_features.len(),
+        operations: plan.operations.len(),
+        warnings: &warnings,
+    };
+    if json {
+        println!("{}", serde_json::to_string(&report).expect("serialises"));
+    } else {
+        println!(
+            "planned {} ({} solid(s), {} faces, {:.1} mm3): stages {:?}",
+            report.part, report.solids, report.faces, report.volume, report.stages_done
+        );
+        for w in &warnings {
+            println!("warning: {w}");
+        }
+        println!("plan written to {}", report.plan_file);
+    }
+    Ok(())
+}
+
+fn default_out(source: &str) -> PathBuf {
+    let stem = source
+        .strip_prefix("builtin:")
+        .map(str::to_string)
+        .unwrap_or_else(|| {
+            let name = Path::new(source)
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "part".into());
+            name.split('.').next().unwrap_or("part").to_string()
+        });
+    PathBuf::from("out").join(format!("{stem}.plan.json"))
+}

@@ -1,0 +1,191 @@
+//! End-to-end tests of the `thinplan` binary: contracts, exit codes, determinism.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn thinplan() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_thinplan"))
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn tmp(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("thinplan-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run_json(cmd: &mut Command) -> (i32, Value) {
+    let out = cmd.output().unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let v: Value = serde_json::from_str(stdout.trim()).unwrap_or_else(|e| {
+        panic!(
+            "stdout is not one JSON object ({e}): {stdout}\nstderr: {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    });
+    (out.status.code().unwrap(), v)
+}
+
+#[test]
+fn default_plan_runs_on_the_bundled_sample_and_is_deterministic() {
+    let d = tmp("default");
+    let a = d.join("a.plan.json");
+    let b = d.join("b.plan.json");
+    let (code, v) = run_json(thinplan().args(["plan", "--json", "--out"]).arg(&a));
+    assert_eq!(code, 0, "{v}");
+    assert_eq!(v["part"], "builtin:wing_rib");
+    assert!(v["stages_done"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|s| s == "setup"));
+    // The B-rep's volume equals the native description's own (analytic) volume.
+    let text = thinplan_import::sample("wing_rib").unwrap();
+    let expected = thinplan_native::parse_part(text, "wing_rib")
+        .unwrap()
+        .expected_volume();
+    let got = v["volume"].as_f64().unwrap();
+    assert!(
+        (got - expected).abs() <= 1e-3 * expected,
+        "{got} vs {expected}"
+    );
+    let (code, _) = run_json(thinplan().args(["plan", "--json", "--out"]).arg(&b));
+    assert_eq!(code, 0);
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    let plan = thinplan_plan::load(&a).unwrap();
+    assert_eq!(plan.part.source, "builtin:wing_rib");
+}
+
+#[test]
+fn inspect_json_follows_the_contract_and_agrees_with_opencascade() {
+    let file = repo().join("../shared/data/aagnet/partC.step");
+    if !file.exists() {
+        eprintln!("note: ../shared/data missing; skipped");
+        return;
+    }
+    let (code, v) = run_json(thinplan().args(["inspect", "--json"]).arg(&file));
+    assert_eq!(code, 0, "{v}");
+    let reference: Value = serde_json::from_str(
+        &std::fs::read_to_string(repo().join("tests/oracle/occ_reference.json")).unwrap(),
+    )
+    .unwrap();
+    let r = &reference["partC.step"];
+    assert_eq!(v["solids"], r["solids"]);
+    assert_eq!(v["faces"], r["faces"]);
+    for k in [
+        "plane", "cylinder", "cone", "sphere", "torus", "bspline", "other",
+    ] {
+        assert_eq!(
+            v["faces_by_kind"][k].as_u64().unwrap(),
+            r["faces_by_kind"][k].as_u64().unwrap_or(0),
+            "{k}"
+        );
+    }
+    for i in 0..3 {
+        let (a, b) = (
+            v["bbox"][i].as_f64().unwrap(),
+            r["bbox"][i].as_f64().unwrap(),
+        );
+        assert!((a - b).abs() <= 1e-3 * b, "bbox[{i}] {a} vs {b}");
+    }
+    let (a, b) = (v["volume"].as_f64().unwrap(), r["volume"].as_f64().unwrap());
+    assert!((a - b).abs() <= 1e-3 * b, "volume {a} vs {b}");
+    assert_eq!(v["units"], "mm");
+}
+
+#[test]
+fn bad_part_files_exit_3_with_a_json_error_naming_the_file() {
+    let d = tmp("bad");
+    let truncated = d.join("truncated.step");
+    std::fs::write(
+        &truncated,
+        "ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1=CARTESIAN_POINT('',(0.,0.",
+    )
+    .unwrap();
+    let cases = [
+        d.join("missing.step"),
+        truncated.clone(),
+        d.join("part.xyz"),
+    ];
+    std::fs::write(d.join("part.xyz"), "hello").unwrap();
+    for path in cases {
+        let (code, v) = run_json(thinplan().args(["inspect", "--json"]).arg(&path));
+        assert_eq!(code, 3, "{path:?}: {v}");
+        let msg = v["error"].as_str().unwrap();
+        let name = path.file_name().unwrap().to_string_lossy();
+        assert!(msg.contains(name.as_ref()), "{msg}");
+    }
+}
+
+#[test]
+fn knowledge_problems_exit_4() {
+    let d = tmp("knowledge");
+    for sub in ["machines", "tools", "materials"] {
+        std::fs::create_dir_all(d.join(sub)).unwrap();
+        for e in std::fs::read_dir(repo().join("knowledge").join(sub)).unwrap() {
+            let p = e.unwrap().path();
+            std::fs::copy(&p, d.join(sub).join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    let out = thinplan().arg("check-knowledge").arg(&d).output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+
+    // An unknown machine in the set-up.
+    let (code, v) = run_json(
+        thinplan()
+            .args(["plan", "--json", "--machine", "nope", "--knowledge"])
+            .arg(&d),
+    );
+    assert_eq!(code, 4, "{v}");
+    assert!(v["error"].as_str().unwrap().contains("nope"));
+
+    // An impossible set-up: a machine too small for the part.
+    let m = d.join("machines/hsm_5axis.ron");
+    let text = std::fs::read_to_string(&m).unwrap();
+    std::fs::write(&m, text.replace("(0.0, 4000.0)", "(0.0, 10.0)")).unwrap();
+    let (code, v) = run_json(thinplan().args(["plan", "--json", "--knowledge"]).arg(&d));
+    assert_eq!(code, 4, "{v}");
+    assert!(
+        v["error"].as_str().unwrap().contains("impossible set-up"),
+        "{v}"
+    );
+
+    // A broken file: every problem listed, with file and line.
+    std::fs::write(d.join("materials/bad.ron"), "(id: 3").unwrap();
+    let (code, v) = run_json(thinplan().args(["check-knowledge", "--json"]).arg(&d));
+    assert_eq!(code, 4);
+    let errors = v["errors"].as_array().unwrap();
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.as_str().unwrap().contains("bad.ron:1:")),
+        "{v}"
+    );
+}
+
+#[test]
+fn bad_setup_direction_is_a_usage_problem() {
+    let (code, v) = run_json(thinplan().args(["plan", "--json", "--up", "0,0,0"]));
+    assert_eq!(code, 3, "{v}");
+    assert!(v["error"].as_str().unwrap().contains("--up"));
+}
+
+#[test]
+fn samples_are_listed_and_each_inspects() {
+    let out = thinplan().arg("samples").output().unwrap();
+    let list = String::from_utf8(out.stdout).unwrap();
+    let names: Vec<&str> = list.lines().collect();
+    assert!(names.len() >= 8, "{names:?}");
+    for name in names {
+        let (code, v) = run_json(thinplan().args(["inspect", "--json", name]));
+        assert_eq!(code, 0, "{name}: {v}");
+        assert_eq!(v["solids"], 1, "{name}");
+        assert!(v["volume"].as_f64().unwrap() > 0.0);
+    }
+}
