@@ -353,6 +353,27 @@ impl<'x, 'a> Ctx<'x, 'a> {
         }
     }
 
+    /// The error for an entity of the wrong kind in a topological position:
+    /// "unsupported" for another entity of the same family (a `SUBEDGE`
+    /// where an edge is expected), "wrong parameter" for anything else.
+    fn bad_kind(&self, idx: usize, types: &[&str], role: &str) -> StepErrorKind {
+        let label = self.type_label(idx);
+        let family = ["EDGE", "LOOP", "FACE", "SHELL", "PATH"];
+        let same_family = family
+            .iter()
+            .any(|f| label.contains(f) && types.iter().any(|t| t.contains(f)));
+        let reason = format!("expected {role} ({})", types.join(" or "));
+        if same_family {
+            self.unsupported(idx, reason)
+        } else {
+            StepErrorKind::WrongParameter {
+                place: place_of(self.ex, idx),
+                entity: label,
+                reason,
+            }
+        }
+    }
+
     fn unsupported(&self, idx: usize, reason: impl Into<String>) -> StepErrorKind {
         StepErrorKind::Unsupported {
             place: place_of(self.ex, idx),
@@ -809,7 +830,10 @@ impl<'x, 'a> Ctx<'x, 'a> {
             return Ok(e);
         }
         self.tick(1, idx)?;
-        let a = self.expect_type(idx, &["EDGE_CURVE"], "an edge")?;
+        if self.head(idx) != "EDGE_CURVE" {
+            return Err(self.bad_kind(idx, &["EDGE_CURVE"], "an edge"));
+        }
+        let a = self.args(idx);
         let start = self.vertex(a.r(1)?)?;
         let end = self.vertex(a.r(2)?)?;
         let same_sense = a.logical(4)?;
@@ -865,10 +889,7 @@ impl<'x, 'a> Ctx<'x, 'a> {
                 edge: self.edge(idx)?,
                 forward: true,
             }),
-            _ => Err(self
-                .expect_type(idx, &["ORIENTED_EDGE"], "an oriented edge")
-                .err()
-                .unwrap_or_else(|| self.unsupported(idx, "edge kind"))),
+            _ => Err(self.bad_kind(idx, &["ORIENTED_EDGE"], "an oriented edge")),
         }
     }
 
@@ -930,10 +951,11 @@ impl<'x, 'a> Ctx<'x, 'a> {
                 }
             }
             _ => {
-                return Err(self
-                    .expect_type(idx, &["EDGE_LOOP", "VERTEX_LOOP", "POLY_LOOP"], "a loop")
-                    .err()
-                    .unwrap_or_else(|| self.unsupported(idx, "loop kind")))
+                return Err(self.bad_kind(
+                    idx,
+                    &["EDGE_LOOP", "VERTEX_LOOP", "POLY_LOOP"],
+                    "a loop",
+                ))
             }
         }
         Ok(l)
@@ -978,10 +1000,7 @@ impl<'x, 'a> Ctx<'x, 'a> {
                 }
                 Ok(f)
             }
-            _ => Err(self
-                .expect_type(idx, &["ADVANCED_FACE", "FACE_SURFACE"], "a face")
-                .err()
-                .unwrap_or_else(|| self.unsupported(idx, "face kind"))),
+            _ => Err(self.bad_kind(idx, &["ADVANCED_FACE", "FACE_SURFACE"], "a face")),
         }
     }
 
@@ -1015,10 +1034,7 @@ impl<'x, 'a> Ctx<'x, 'a> {
                 }
                 Ok(s)
             }
-            _ => Err(self
-                .expect_type(idx, &["CLOSED_SHELL", "OPEN_SHELL"], "a shell")
-                .err()
-                .unwrap_or_else(|| self.unsupported(idx, "shell kind"))),
+            _ => Err(self.bad_kind(idx, &["CLOSED_SHELL", "OPEN_SHELL"], "a shell")),
         }
     }
 

@@ -489,3 +489,31 @@ fn missing_file_is_an_io_error_naming_it() {
     assert!(matches!(e.kind, StepErrorKind::Io(_)));
     assert!(e.to_string().contains("no_such_file.step"));
 }
+
+#[test]
+fn unsupported_topology_and_wrong_kinds_are_told_apart() {
+    let t = box_text().replace(
+        "#30=EDGE_CURVE('',#11,#19,#29,.T.);",
+        "#30=SUBEDGE('',#11,#19,#9200);#9200=EDGE_CURVE('',#11,#19,#29,.T.);",
+    );
+    let e = read_str(&t).unwrap_err();
+    assert!(matches!(e.kind, StepErrorKind::Unsupported { .. }), "{e}");
+    assert!(
+        e.to_string().contains("#30") && e.to_string().contains("SUBEDGE"),
+        "{e}"
+    );
+    // A point where a face belongs.
+    let t = box_text().replacen("CLOSED_SHELL('',(#", "CLOSED_SHELL('',(#10,#", 1);
+    let e = read_str(&t).unwrap_err();
+    let StepErrorKind::WrongParameter {
+        place,
+        entity,
+        reason,
+    } = &e.kind
+    else {
+        panic!("{e}")
+    };
+    assert_eq!(place.id, Some(10));
+    assert_eq!(entity, "CARTESIAN_POINT");
+    assert!(reason.contains("expected a face"), "{reason}");
+}
