@@ -751,6 +751,29 @@ fn triangulate(
         uv,
         p,
     };
+    // Loop samples of circles are exactly cocircular, which sends every
+    // in-circle test down the slow exact-arithmetic path. A deterministic
+    // jitter of 1e-10 of the extent, applied to the triangulation position
+    // only (parameters and 3D points stay exact), avoids that.
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for r in rings {
+        let (a, b) = extent(r);
+        lo = lo.min(a * DVec2::new(su, sv));
+        hi = hi.max(b * DVec2::new(su, sv));
+    }
+    let jit = 1e-10 * (hi - lo).max_element().max(1e-300);
+    let mut counter: u64 = 0;
+    let mut jitter = move || {
+        counter = counter.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = counter;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        let a = (z & 0xFFFF_FFFF) as f64 / u32::MAX as f64 - 0.5;
+        let b = (z >> 32) as f64 / u32::MAX as f64 - 0.5;
+        Point2::new(a * jit, b * jit)
+    };
     let mut cdt = Cdt::new();
     for ring in rings {
         let mut hs: Vec<FixedVertexHandle> = Vec::with_capacity(ring.len());
@@ -758,8 +781,11 @@ fn triangulate(
             if !(q.uv.is_finite() && q.p.is_finite()) {
                 return Err(TessError::BadLoops("non-finite parameters".into()));
             }
+            let mut v = mk(q.uv, q.p);
+            let j = jitter();
+            v.pos = Point2::new(v.pos.x + j.x, v.pos.y + j.y);
             let h = cdt
-                .insert(mk(q.uv, q.p))
+                .insert(v)
                 .map_err(|e| TessError::Triangulation(format!("{e:?}")))?;
             hs.push(h);
         }
@@ -780,7 +806,12 @@ fn triangulate(
 
     let planar = matches!(surf, Surface::Plane { .. });
     if !planar {
-        refine(&mut cdt, surf, tol, &mk);
+        refine(&mut cdt, surf, tol, &mut |uv, p| {
+            let mut v = mk(uv, p);
+            let j = jitter();
+            v.pos = Point2::new(v.pos.x + j.x, v.pos.y + j.y);
+            v
+        });
     }
 
     let inside = classify(&cdt);
@@ -851,7 +882,12 @@ fn triangulate(
 
 /// Inserts edge midpoints and centroids where the flat triangles leave the
 /// surface by more than the chord tolerance or the normal turns too much.
-fn refine(cdt: &mut Cdt, surf: &Surface, tol: &TessTolerance, mk: &impl Fn(DVec2, DVec3) -> Tv) {
+fn refine(
+    cdt: &mut Cdt,
+    surf: &Surface,
+    tol: &TessTolerance,
+    mk: &mut impl FnMut(DVec2, DVec3) -> Tv,
+) {
     let cos_angle = tol.angle.cos();
     let chord = tol.chord * (1.0 + 1e-9);
     for _ in 0..MAX_REFINE_ITERS {
@@ -877,9 +913,14 @@ fn refine(cdt: &mut Cdt, surf: &Surface, tol: &TessTolerance, mk: &impl Fn(DVec2
                 let muv = 0.5 * (a.uv + b.uv);
                 let sp = surf.point(muv.x, muv.y);
                 let err = sp.distance(0.5 * (a.p + b.p));
-                let na = surf.normal(a.uv.x, a.uv.y);
-                let nb = surf.normal(b.uv.x, b.uv.y);
-                if err > chord || na.dot(nb) < cos_angle {
+                // The angle criterion only on edges long against the chord:
+                // near singular points (cone apex) normals turn on any scale.
+                let turns = len > 10.0 * tol.chord && {
+                    let na = surf.normal(a.uv.x, a.uv.y);
+                    let nb = surf.normal(b.uv.x, b.uv.y);
+                    na.dot(nb) < cos_angle
+                };
+                if err > chord || turns {
                     new_pts.push(muv);
                 }
             }
