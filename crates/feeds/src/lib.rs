@@ -12,9 +12,10 @@
 //!
 //! 1. **Geometry.** Segment `i` runs from `points[i]` to `points[i+1]`; its unit direction
 //!    `d_i` is the tangent along it. At every interior point the curvature vector
-//!    `c_j = κ_j·n_j` is that of the circle through the point and its two neighbours (Menger
-//!    curvature `κ = 2 sin θ / |p_{j+1} − p_{j−1}|`, θ the turning angle, `n` the unit normal
-//!    towards the centre). This is exact for points on a circle. A point whose turning angle
+//!    `c_j = κ_j·n_j` is that of the circle through the point and its two neighbours
+//!    (`κ = 1/R`, equal to the Menger curvature `2 sin θ / |p_{j+1} − p_{j−1}|` with θ the
+//!    turning angle; `n` the unit vector from the point to the circle's centre). This is exact
+//!    for points on a circle. A point whose turning angle
 //!    exceeds [`MachineLimits::corner_angle_deg`] is a **corner**: the speed there is 0 and
 //!    its curvature is not used (the kink is not a circle). The two path ends copy the
 //!    curvature of their neighbour (a sampled curve continues), and have speed 0.
@@ -279,15 +280,15 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
             if cos < cos_corner {
                 w[j].cap2 = 0.0;
             } else {
+                // Circle through the three points: its centre relative to the previous
+                // point, from the two chords `a` and `a + outgoing`.
                 let chord = a + outgoing;
-                let cl = chord.length();
-                let sin = da.cross(db).length();
-                if sin > 1e-15 && cl > 0.0 {
-                    let kappa = 2.0 * sin / cl;
-                    let tan = chord / cl;
-                    let turn = db - da;
-                    let nrm = (turn - tan * turn.dot(tan)).normalize_or_zero();
-                    c = nrm * kappa;
+                let cr = a.cross(outgoing);
+                let cr2 = cr.length_squared();
+                if cr2 > 1e-30 * (la * lb).powi(2) {
+                    let centre = (chord.length_squared() * cr.cross(a) + la * la * chord.cross(cr)) / (2.0 * cr2);
+                    let to_centre = centre - a;
+                    c = to_centre / to_centre.length_squared();
                 }
             }
         }
@@ -423,7 +424,16 @@ fn accel_bound(u0: f64, w: &Work, c_far: &DVec3, dir: f64, limits: &MachineLimit
             a_free = a_free.min(free);
         }
     }
-    let a_free = a_free.max(0.0);
+    // The tangential acceleration alone also stays within every axis limit, even where the
+    // normal acceleration points against it and the coupled bound would allow more: the
+    // three-point curvature is an estimate, and this keeps "tangential ≤ min_k A_k/|d_k|"
+    // true by itself.
+    let a_tan = (0..3)
+        .filter(|&k| w.d[k].abs() >= 1e-12)
+        .map(|k| limits.a_max[k] / w.d[k].abs())
+        .fold(f64::INFINITY, f64::min);
+    let a_free = a_free.min(a_tan).max(0.0);
+    let a_cap = a_cap.min(a_tan);
     if u0 + 2.0 * a_free * ds <= vc2 {
         a_free
     } else {
@@ -437,27 +447,32 @@ fn accel_bound(u0: f64, w: &Work, c_far: &DVec3, dir: f64, limits: &MachineLimit
 /// `u(σ) = min(u0 + 2aσ, vc2, u1 + 2b(ds − σ))`.
 #[inline]
 fn segment_time(u0: f64, u1: f64, vc2: f64, a: f64, b: f64, ds: f64) -> f64 {
-    let umax = u0.max(u1);
-    let peak = if a + b > 0.0 {
-        let x = (u1 + 2.0 * b * ds - u0) / (2.0 * (a + b));
-        u0 + 2.0 * a * x
-    } else {
-        umax
-    };
-    let up = peak.min(vc2).max(umax);
-    let d1 = if a > 0.0 { (up - u0) / (2.0 * a) } else { 0.0 };
-    let d3 = if b > 0.0 { (up - u1) / (2.0 * b) } else { 0.0 };
-    let d2 = (ds - d1 - d3).max(0.0);
-    let (v0, v1, vp) = (u0.sqrt(), u1.sqrt(), up.sqrt());
+    let (v0, v1) = (u0.sqrt(), u1.sqrt());
+    if a + b <= 0.0 {
+        // No acceleration either way: u0 = u1, constant speed.
+        let v = v0.max(v1);
+        return if v > 0.0 { ds / v } else { f64::INFINITY };
+    }
+    // Where the acceleration and deceleration lines meet (distances are computed from the
+    // sum a + b, never from one tiny rate alone, which would amplify rounding in u).
+    let x = ((u1 - u0 + 2.0 * b * ds) / (2.0 * (a + b))).clamp(0.0, ds);
+    let peak = u0 + 2.0 * a * x;
+    if peak > vc2 && a > 0.0 && b > 0.0 {
+        // Accelerate to the cruise cap, cruise, decelerate.
+        let d1 = ((vc2 - u0) / (2.0 * a)).max(0.0);
+        let d3 = ((vc2 - u1) / (2.0 * b)).max(0.0);
+        if d1 + d3 <= ds {
+            let vc = vc2.sqrt();
+            return 2.0 * d1 / (v0 + vc) + (ds - d1 - d3) / vc + 2.0 * d3 / (vc + v1);
+        }
+    }
+    let vp = peak.min(vc2.max(u0).max(u1)).max(u0).max(u1).sqrt();
     let mut t = 0.0;
-    if d1 > 0.0 {
-        t += 2.0 * d1 / (v0 + vp);
+    if x > 0.0 {
+        t += 2.0 * x / (v0 + vp);
     }
-    if d3 > 0.0 {
-        t += 2.0 * d3 / (vp + v1);
-    }
-    if d2 > 0.0 {
-        t += d2 / vp;
+    if ds - x > 0.0 {
+        t += 2.0 * (ds - x) / (vp + v1);
     }
     t
 }

@@ -149,6 +149,20 @@ pub fn spiral(r_start: f64, r_end: f64, pitch: f64, spacing: f64) -> Vec<DVec3> 
     out
 }
 
+/// Helix about the z axis (a helical ramp entry): `turns` turns of `radius`, descending
+/// `pitch` per turn from z = 0, starting at (radius, 0, 0), CCW.
+pub fn helix(radius: f64, pitch: f64, turns: f64, spacing: f64) -> Vec<DVec3> {
+    let sweep = TAU * turns;
+    let len = (radius * sweep).hypot(pitch * turns);
+    let n = steps(len, spacing);
+    (0..=n)
+        .map(|i| {
+            let a = sweep * i as f64 / n as f64;
+            DVec3::new(radius * a.cos(), radius * a.sin(), -pitch * a / TAU)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
