@@ -12,7 +12,11 @@ fn main() {
     } else {
         println!(
             "D = V²/(2A) = {d:.1} mm; FreeCAD Adaptive: {}",
-            if cfg.adaptive.is_some() { "yes" } else { "not set up (tools/peers/freecad/setup.sh)" }
+            if cfg.adaptive.is_some() {
+                "yes"
+            } else {
+                "not set up (tools/peers/freecad/setup.sh)"
+            }
         );
         print!("{}", format_table(&rows));
         println!("({:.1} s)", t0.elapsed().as_secs_f64());

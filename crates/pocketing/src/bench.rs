@@ -114,7 +114,8 @@ impl AdaptivePeer {
         let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/peers/freecad");
         let script = root.join("adaptive_pocket.py");
         let home = std::env::var_os("HOME")?;
-        let lib = PathBuf::from(home).join(".cache/thinplan-freecad/usr/lib/freecad-python3/lib/area.so");
+        let lib =
+            PathBuf::from(home).join(".cache/thinplan-freecad/usr/lib/freecad-python3/lib/area.so");
         if script.exists() && lib.exists() {
             Some(AdaptivePeer {
                 python: "python3".into(),
@@ -297,7 +298,8 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
 pub fn format_table(rows: &[BenchRow]) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    let _ = writeln!(
+    let _ =
+        writeln!(
         s,
         "{:<17} {:>5} {:>7} {:>6} {:>6} | {:>9} {:>7} | {:>9} {:>7} {:>15} | {:>9} {:>7} | {:>7}",
         "pocket", "L/D", "L mm", "tool", "step", "off mm", "off s", "curv mm", "curv s", "method",

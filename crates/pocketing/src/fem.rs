@@ -250,9 +250,5 @@ pub fn solve(mesh: &Mesh, field: Field) -> Result<Solution, PocketError> {
         return Err(PocketError::Solver("non-positive solution".into()));
     }
     let u = raw.iter().map(|v| v / max).collect();
-    Ok(Solution {
-        u,
-        raw,
-        eigenvalue,
-    })
+    Ok(Solution { u, raw, eigenvalue })
 }

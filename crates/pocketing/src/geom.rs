@@ -10,7 +10,11 @@ use glam::DVec2;
 pub fn sample_pline(pl: &Polyline<f64>, max_seg: f64, max_angle: f64) -> Vec<DVec2> {
     let mut out = Vec::new();
     let n = pl.vertex_count();
-    let seg_count = if pl.is_closed() { n } else { n.saturating_sub(1) };
+    let seg_count = if pl.is_closed() {
+        n
+    } else {
+        n.saturating_sub(1)
+    };
     for i in 0..seg_count {
         let v1 = pl.at(i);
         let v2 = pl.at((i + 1) % n);

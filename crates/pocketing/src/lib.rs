@@ -113,7 +113,9 @@ impl Pocket {
             ));
         }
         if self.outer.area().abs() < 1e-9 {
-            return Err(PocketError::BadProfile("outer profile has zero area".into()));
+            return Err(PocketError::BadProfile(
+                "outer profile has zero area".into(),
+            ));
         }
         Ok(())
     }

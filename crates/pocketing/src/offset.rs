@@ -4,7 +4,7 @@ use cavalier_contours::polyline::{PlineSource, Polyline};
 use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 use glam::DVec2;
 
-use crate::geom::{dist_point_seg, directed_gap, sample_pline, SegIndex};
+use crate::geom::{directed_gap, dist_point_seg, sample_pline, SegIndex};
 use crate::{Method, Pocket, PocketError, PocketParams, PocketPath};
 
 /// Inward offset loops of the pocket (outer shrunk, islands grown) by distance `d`.

@@ -138,7 +138,7 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
         .min(perimeter(&rough_loop) / 24.0);
     let mesh = Mesh::of_loop(&rough_loop, h)?;
     let sol = fem::solve(&mesh, params.field)?;
-    let mut factor = 0.97;
+    let mut factor = 1.0;
     let mut last = None;
     for _ in 0..5 {
         match attempt(params, &mesh, &sol, &rough_loop, &boundary, factor) {
@@ -148,11 +148,114 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
                     return Ok(*p);
                 }
                 last = Some(p);
-                factor *= 0.9;
+                factor *= 0.95;
             }
         }
     }
     Ok(*last.expect("at least one attempt"))
+}
+
+/// Sample `f` on t ∈ [0, 1] at `n` even steps, bisecting any step longer than `step`.
+fn sample_turn(f: impl Fn(f64) -> DVec2, n: usize, step: f64) -> Vec<DVec2> {
+    fn rec(
+        f: &dyn Fn(f64) -> DVec2,
+        t0: f64,
+        p0: DVec2,
+        t1: f64,
+        p1: DVec2,
+        step: f64,
+        depth: u32,
+        out: &mut Vec<DVec2>,
+    ) {
+        if depth < 20 && p0.distance(p1) > step {
+            let tm = 0.5 * (t0 + t1);
+            let pm = f(tm);
+            rec(f, t0, p0, tm, pm, step, depth + 1, out);
+            rec(f, tm, pm, t1, p1, step, depth + 1, out);
+        } else {
+            out.push(p1);
+        }
+    }
+    let mut out = vec![f(0.0)];
+    let mut prev = out[0];
+    for j in 1..=n {
+        let t = j as f64 / n as f64;
+        let p = f(t);
+        rec(&f, (j - 1) as f64 / n as f64, prev, t, p, step, 0, &mut out);
+        prev = p;
+    }
+    out
+}
+
+/// Greedy contour levels outward from the maximum at `c`: each next level is the lowest whose
+/// single contour loop is within `target` (symmetric Hausdorff) of the previous one; the first
+/// contour must have every mesh vertex inside it within `target` of it. Stops when the
+/// roughing boundary is within `target` of the last contour. `Err` when no single loop fits.
+fn choose_levels(
+    mesh: &Mesh,
+    sol: &Solution,
+    rough_loop: &[DVec2],
+    c: DVec2,
+    target: f64,
+) -> Result<Vec<(f64, Vec<DVec2>)>, ()> {
+    let mut out: Vec<(f64, Vec<DVec2>)> = Vec::new();
+    let mut prev_level = 1.0;
+    let interior_gap = |lvl: f64, lp: &[DVec2]| -> f64 {
+        let idx = SegIndex::new(&[lp], true);
+        let mut g = idx.nearest(c);
+        for (p, &u) in mesh.vertices.iter().zip(&sol.u) {
+            if u > lvl {
+                g = g.max(idx.nearest(*p));
+            }
+        }
+        g
+    };
+    loop {
+        let done = match out.last() {
+            None => interior_gap(0.0, rough_loop) <= target,
+            Some((_, prev)) => loop_gap(prev, rough_loop) <= target,
+        };
+        if done {
+            return Ok(out);
+        }
+        let (mut lo, mut hi) = (0.0, prev_level);
+        let mut best: Option<(f64, Vec<DVec2>)> = None;
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            let mut l = contour_loops(mesh, &sol.u, mid);
+            let ok = if l.len() == 1 {
+                let lp = l.pop().unwrap();
+                let g = match out.last() {
+                    None => interior_gap(mid, &lp),
+                    Some((_, prev)) => loop_gap(prev, &lp),
+                };
+                if g <= target {
+                    best = Some((mid, lp));
+                    true
+                } else {
+                    false
+                }
+            } else {
+                false
+            };
+            if ok {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+            if hi - lo < 1e-6 {
+                break;
+            }
+        }
+        let Some((lvl, lp)) = best else {
+            return Err(());
+        };
+        if prev_level - lvl < 1e-9 {
+            return Err(());
+        }
+        prev_level = lvl;
+        out.push((lvl, lp));
+    }
 }
 
 fn attempt(
@@ -179,67 +282,51 @@ fn attempt(
         (*p - c).to_angle()
     };
     let Some(terminal) = Polar::new(rough_loop, c, theta0) else {
-        return Attempt::Fallback("tool-offset boundary is not star-shaped about the centre".into());
+        return Attempt::Fallback(
+            "tool-offset boundary is not star-shaped about the centre".into(),
+        );
     };
-    // --- levels, outward from the maximum
+    // --- levels, outward from the maximum: greedy with the target gap, then the smallest
+    // target that needs no more contours (so the gaps come out even instead of leaving a thin
+    // last orbit)
+    let Ok(first) = choose_levels(mesh, sol, rough_loop, c, target) else {
+        return Attempt::Fallback("no single contour within the stepover below the maximum".into());
+    };
+    let n0 = first.len();
+    let (mut lo, mut hi) = (0.5 * target, target);
+    let mut chosen = first;
+    for _ in 0..6 {
+        let mid = 0.5 * (lo + hi);
+        match choose_levels(mesh, sol, rough_loop, c, mid) {
+            Ok(l) if l.len() <= n0 => {
+                hi = mid;
+                chosen = l;
+            }
+            _ => lo = mid,
+        }
+    }
     let mut contours: Vec<Vec<DVec2>> = Vec::new();
     let mut polars: Vec<Polar> = Vec::new();
-    let mut prev: Vec<DVec2> = vec![c];
-    let mut prev_level = 1.0;
-    loop {
-        if loop_gap(&prev, rough_loop) <= target {
-            break;
-        }
-        let single = |lvl: f64| -> Option<Vec<DVec2>> {
-            let mut l = contour_loops(mesh, &sol.u, lvl);
-            if l.len() == 1 {
-                l.pop()
-            } else {
-                None
-            }
-        };
-        let (mut lo, mut hi) = (0.0, prev_level);
-        let mut best: Option<(f64, Vec<DVec2>)> = None;
-        for _ in 0..40 {
-            let mid = 0.5 * (lo + hi);
-            match single(mid) {
-                Some(lp) if loop_gap(&prev, &lp) <= target => {
-                    hi = mid;
-                    best = Some((mid, lp));
-                }
-                Some(_) => lo = mid,
-                None => {
-                    // several loops (several maxima) or none: only acceptable close to the top
-                    if mid > prev_level - 1e-9 {
-                        break;
-                    }
-                    lo = mid;
-                }
-            }
-            if hi - lo < 1e-6 {
-                break;
-            }
-        }
-        let Some((lvl, lp)) = best else {
-            return Attempt::Fallback(format!(
-                "no single contour within the stepover below level {prev_level:.4}"
-            ));
-        };
-        if prev_level - lvl < 1e-9 {
-            return Attempt::Fallback("contour levels stopped progressing".into());
-        }
+    for (lvl, lp) in chosen {
         let Some(pol) = Polar::new(&lp, c, theta0) else {
             return Attempt::Fallback(format!(
                 "contour at level {lvl:.4} is not star-shaped about the centre"
             ));
         };
         polars.push(pol);
-        contours.push(lp.clone());
-        prev = lp;
-        prev_level = lvl;
+        contours.push(lp);
     }
+    // the first orbit spirals out of the centre when the first contour is within the stepover
+    // of it; for elongated pockets (a ridge-like maximum) it enters the first contour on the
+    // start ray and runs it in full instead
+    let from_centre = contours
+        .first()
+        .is_none_or(|c1| loop_gap(&[c], c1) <= target);
     // --- orbits: centre → C1 → … → Cm → ∂Ω' (roughing boundary)
-    let mut radii: Vec<Box<dyn Fn(f64) -> f64 + '_>> = vec![Box::new(|_| 0.0)];
+    let mut radii: Vec<Box<dyn Fn(f64) -> f64 + '_>> = Vec::new();
+    if from_centre {
+        radii.push(Box::new(|_| 0.0));
+    }
     for p in &polars {
         radii.push(Box::new(move |t| p.radius(t, theta0)));
     }
@@ -251,15 +338,36 @@ fn attempt(
         .chain(std::iter::once(terminal.max_radius()))
         .collect();
     let mut turns: Vec<Vec<DVec2>> = Vec::new();
-    for k in 0..radii.len() - 1 {
-        let n = ((TAU * rmax[k] / step).ceil() as usize).max(24);
-        let mut turn = Vec::with_capacity(n + 1);
-        for j in 0..=n {
-            let t = j as f64 / n as f64;
-            let th = TAU * t;
-            let rr = (1.0 - t) * radii[k](th) + t * radii[k + 1](th);
-            turn.push(c + rr * DVec2::from_angle(theta0 + th));
+    if !from_centre {
+        // straight entry along the start ray, then the first contour in full
+        let p = &polars[0];
+        let n = ((TAU * p.max_radius() / step).ceil() as usize).max(24);
+        let mut t0 = vec![c];
+        let first = sample_turn(
+            |t| c + p.radius(TAU * t, theta0) * DVec2::from_angle(theta0 + TAU * t),
+            n,
+            step,
+        );
+        // straight entry from the centre, subdivided
+        let k = (c.distance(first[0]) / step).ceil().max(1.0) as usize;
+        for j in 1..k {
+            t0.push(c.lerp(first[0], j as f64 / k as f64));
         }
+        t0.extend(first);
+        turns.push(t0);
+    }
+    let roff = usize::from(from_centre);
+    for k in 0..radii.len() - 1 {
+        let n = ((TAU * rmax[k + 1 - roff] / step).ceil() as usize).max(24);
+        let (ra, rb) = (&radii[k], &radii[k + 1]);
+        let turn = sample_turn(
+            |t| {
+                let th = TAU * t;
+                c + ((1.0 - t) * ra(th) + t * rb(th)) * DVec2::from_angle(theta0 + th)
+            },
+            n,
+            step,
+        );
         turns.push(turn);
     }
     // full orbit on the roughing boundary, starting where the spiral ends
@@ -305,10 +413,7 @@ fn attempt(
                 flat[i] = old[i] + 0.5 * (avg - old[i]);
             }
         }
-        let smoothed: Vec<Vec<DVec2>> = bounds
-            .iter()
-            .map(|&(a, b)| flat[a..b].to_vec())
-            .collect();
+        let smoothed: Vec<Vec<DVec2>> = bounds.iter().map(|&(a, b)| flat[a..b].to_vec()).collect();
         let sg = gap_of(&smoothed);
         if sg <= s || sg <= raw_gap {
             turns = smoothed;
@@ -319,13 +424,19 @@ fn attempt(
     let mut points: Vec<DVec2> = Vec::new();
     for t in &turns {
         for &p in t {
-            if points.last().is_none_or(|q: &DVec2| q.distance_squared(p) > 1e-18) {
+            if points
+                .last()
+                .is_none_or(|q: &DVec2| q.distance_squared(p) > 1e-18)
+            {
                 points.push(p);
             }
         }
     }
     for &p in &rough_turn[1..] {
-        if points.last().is_none_or(|q: &DVec2| q.distance_squared(p) > 1e-18) {
+        if points
+            .last()
+            .is_none_or(|q: &DVec2| q.distance_squared(p) > 1e-18)
+        {
             points.push(p);
         }
     }

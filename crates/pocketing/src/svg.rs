@@ -54,13 +54,28 @@ pub fn pocket_svg(pocket: &Pocket, path: &PocketPath) -> String {
         path.max_gap
     );
     out.push_str("<g transform=\"scale(1,-1)\">\n");
-    poly(&mut out, &wall, true, &format!("stroke=\"black\" stroke-width=\"{:.4}\"", 2.0 * w));
+    poly(
+        &mut out,
+        &wall,
+        true,
+        &format!("stroke=\"black\" stroke-width=\"{:.4}\"", 2.0 * w),
+    );
     for isl in &pocket.islands {
         let pts = sample_pline(isl, size / 200.0, 2f64.to_radians());
-        poly(&mut out, &pts, true, &format!("stroke=\"black\" stroke-width=\"{:.4}\"", 2.0 * w));
+        poly(
+            &mut out,
+            &pts,
+            true,
+            &format!("stroke=\"black\" stroke-width=\"{:.4}\"", 2.0 * w),
+        );
     }
     for c in &path.contours {
-        poly(&mut out, c, true, &format!("stroke=\"#6fa8dc\" stroke-width=\"{:.4}\"", 0.5 * w));
+        poly(
+            &mut out,
+            c,
+            true,
+            &format!("stroke=\"#6fa8dc\" stroke-width=\"{:.4}\"", 0.5 * w),
+        );
     }
     poly(
         &mut out,
