@@ -34,14 +34,23 @@ fn main() {
         corner_angle_deg: 30.0,
     };
     let cases: Vec<(&str, Vec<DVec3>)> = vec![
-        ("line 200", paths::line(DVec3::ZERO, DVec3::new(200.0, 0.0, 0.0), 0.5)),
-        ("diagonal 200", paths::line(DVec3::ZERO, DVec3::new(120.0, 160.0, 0.0), 0.5)),
+        (
+            "line 200",
+            paths::line(DVec3::ZERO, DVec3::new(200.0, 0.0, 0.0), 0.5),
+        ),
+        (
+            "diagonal 200",
+            paths::line(DVec3::ZERO, DVec3::new(120.0, 160.0, 0.0), 0.5),
+        ),
         ("circle R50", paths::circle(50.0, 0.5)),
         ("circle R10", paths::circle(10.0, 0.1)),
         ("pentagon R60 r10", paths::rounded_pentagon(60.0, 10.0, 0.5)),
         ("pentagon R60 r3", paths::rounded_pentagon(60.0, 3.0, 0.2)),
         ("spiral 5-60 p5", paths::spiral(5.0, 60.0, 5.0, 0.5)),
-        ("zigzag-r 100x60 s10", paths::zigzag_rounded(100.0, 60.0, 10.0, 0.5)),
+        (
+            "zigzag-r 100x60 s10",
+            paths::zigzag_rounded(100.0, 60.0, 10.0, 0.5),
+        ),
         ("helix R10 p2 x3", paths::helix(10.0, 2.0, 3.0, 0.2)),
     ];
 
@@ -49,7 +58,10 @@ fn main() {
     let mut ours = Vec::new();
     for (name, pts) in &cases {
         let turn = max_turn_deg(pts);
-        assert!(turn < limits.corner_angle_deg, "{name}: turning angle {turn}° is a corner");
+        assert!(
+            turn < limits.corner_angle_deg,
+            "{name}: turning angle {turn}° is a corner"
+        );
         let sched = schedule_polyline_uniform(pts, 1e6, &limits);
         ours.push((sched.total_time, pts.len(), sched.length));
         json_paths.push(serde_json::json!({
@@ -59,18 +71,26 @@ fn main() {
             "a_max": limits.a_max,
         }));
     }
-    let dir = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(std::env::temp_dir);
+    let dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir);
     std::fs::create_dir_all(&dir).expect("create output dir");
     let json_file = dir.join("toppra_paths.json");
-    std::fs::write(&json_file, serde_json::to_vec(&serde_json::json!({ "paths": json_paths })).unwrap())
-        .expect("write paths JSON");
+    std::fs::write(
+        &json_file,
+        serde_json::to_vec(&serde_json::json!({ "paths": json_paths })).unwrap(),
+    )
+    .expect("write paths JSON");
     eprintln!("paths written to {}", json_file.display());
 
     let venv = std::env::var_os("THINPLAN_VENV")
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache/thinplan-venv"));
+        .unwrap_or_else(|| {
+            PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache/thinplan-venv")
+        });
     let python = venv.join("bin/python");
-    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/peers/toppra/toppra_time.py");
+    let script =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/peers/toppra/toppra_time.py");
     let mut theirs: Vec<Option<(f64, u64)>> = vec![None; cases.len()];
     let mut scheme = String::new();
     if python.exists() {
@@ -84,13 +104,21 @@ fn main() {
             let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("TOPP-RA JSON");
             scheme = format!("toppra {} ({})", v["toppra_version"], v["scheme"]);
             for (i, r) in v["results"].as_array().unwrap().iter().enumerate() {
-                theirs[i] = r["time"].as_f64().map(|t| (t, r["gridpoints"].as_u64().unwrap_or(0)));
+                theirs[i] = r["time"]
+                    .as_f64()
+                    .map(|t| (t, r["gridpoints"].as_u64().unwrap_or(0)));
             }
         } else {
-            eprintln!("toppra_time.py failed:\n{}", String::from_utf8_lossy(&out.stderr));
+            eprintln!(
+                "toppra_time.py failed:\n{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
         }
     } else {
-        eprintln!("no venv at {} (run tools/peers/toppra/setup.sh): TOPP-RA column left empty", venv.display());
+        eprintln!(
+            "no venv at {} (run tools/peers/toppra/setup.sh): TOPP-RA column left empty",
+            venv.display()
+        );
     }
 
     if !scheme.is_empty() {
@@ -101,7 +129,10 @@ fn main() {
     for (i, (name, _)) in cases.iter().enumerate() {
         let (t, n, len) = ours[i];
         match theirs[i] {
-            Some((tt, grid)) => println!("| {name} | {n} | {len:.1} | {t:.6} | {tt:.6} | {grid} | {:.4} |", t / tt),
+            Some((tt, grid)) => println!(
+                "| {name} | {n} | {len:.1} | {t:.6} | {tt:.6} | {grid} | {:.4} |",
+                t / tt
+            ),
             None => println!("| {name} | {n} | {len:.1} | {t:.6} | – | – | – |"),
         }
     }

@@ -43,18 +43,29 @@
 //! through. The bound is linear in `u`, so it is solved in closed form per segment (no
 //! iteration): `a⁺` is the largest acceleration for which the constraint holds from `u_i` up
 //! to `min(vc_i², u_i + 2a⁺Δs)`; `a⁻` the same backwards from `u_{i+1}`. With no curvature
-//! this is `a = min_k A_k/|d_ik|`. This coupling is what TOPP-RA's per-axis
-//! `JointAccelerationConstraint` models too, and is needed to come within 1 % of it on
-//! curved paths. The centripetal cap `A_c` caps only the normal acceleration and does not
+//! this is `a = min_k A_k/|d_ik|`, and the tangential acceleration never exceeds that value
+//! even where the normal acceleration on an axis points against the tangential one and the
+//! coupled bound alone would allow more (the curvature is a three-point estimate; this keeps
+//! "tangential acceleration ≤ min_k A_k/|d_ik|" true on its own, at a cost of about 0.3 % on
+//! a circle against TOPP-RA, which does exploit it). The same coupling is what TOPP-RA's
+//! per-axis `JointAccelerationConstraint` models, and without it curved paths would break
+//! the axis limits. The centripetal cap `A_c` caps only the normal acceleration and does not
 //! take from the tangential budget.
 //!
-//! Why the passes are consistent: `0 ∈ [a⁻-range]` at every admissible speed (the normal cap),
-//! so a point lowered by the backward pass only turns its segments into deceleration, which
-//! the backward pass itself has checked; recomputing `a⁺` from the final speeds in step 5
-//! never needs more than the forward pass allowed.
+//! Why the passes are consistent: zero tangential acceleration is feasible at every admissible
+//! speed (the normal cap of step 2), so a point lowered by the backward pass only turns its
+//! segments into deceleration, which the backward pass itself has checked; `a⁺` is
+//! recomputed from the final speed where the backward pass lowered a point.
 //!
-//! Cost: five linear passes over the points and one scratch allocation (besides the three
-//! output vectors); tens of millions of points per second in release (see the README).
+//! Known conservatism (measured against TOPP-RA, see the README): that same cap keeps the
+//! speed at or below the "cruise-feasible" speed everywhere, whereas the true optimum can be
+//! above it where accelerating out of (or braking into) a tight arc relieves the saturated
+//! axis; and the curvature of both ends of a segment is applied to the whole segment, which
+//! costs O(spacing).
+//!
+//! Cost: six linear passes over the points and one scratch allocation (besides the three
+//! output vectors); a few million points per second in release on the shared 2-core machine
+//! (see the README).
 //!
 //! # Conventions
 //!
@@ -196,6 +207,12 @@ struct Work {
     c: DVec3,
     /// Speed cap² at point i.
     cap2: f64,
+    /// Tangential acceleration limit of segment i alone, `min_k A_k/|d_ik|`.
+    a_tan: f64,
+    /// Acceleration of segment i from the forward pass (valid while u_i is unchanged).
+    a_fwd: f64,
+    /// Deceleration of segment i from the backward pass.
+    b_bwd: f64,
 }
 
 /// Time-optimal feed schedule along a polyline (Bieterman's two-pass algorithm; see the crate
@@ -238,6 +255,9 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
         vc2: f64::INFINITY,
         c: DVec3::ZERO,
         cap2: f64::INFINITY,
+        a_tan: f64::INFINITY,
+        a_fwd: 0.0,
+        b_bwd: 0.0,
     };
     let mut w = vec![zero; n];
 
@@ -248,7 +268,10 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
     s.push(0.0);
     for i in 0..n - 1 {
         let f = feed_cap[i];
-        assert!(f > 0.0, "schedule_polyline: feed cap of segment {i} must be > 0, got {f}");
+        assert!(
+            f > 0.0,
+            "schedule_polyline: feed cap of segment {i} must be > 0, got {f}"
+        );
         let delta = points[i + 1] - points[i];
         let len = delta.length();
         acc += len;
@@ -286,7 +309,8 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
                 let cr = a.cross(outgoing);
                 let cr2 = cr.length_squared();
                 if cr2 > 1e-30 * (la * lb).powi(2) {
-                    let centre = (chord.length_squared() * cr.cross(a) + la * la * chord.cross(cr)) / (2.0 * cr2);
+                    let centre = (chord.length_squared() * cr.cross(a) + la * la * chord.cross(cr))
+                        / (2.0 * cr2);
                     let to_centre = centre - a;
                     c = to_centre / to_centre.length_squared();
                 }
@@ -317,6 +341,10 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
                 vc2 = vc2.min(normal_cap2(c, limits));
             }
             w[i].vc2 = vc2;
+            w[i].a_tan = (0..3)
+                .filter(|&k| wi.d[k].abs() >= 1e-12)
+                .map(|k| limits.a_max[k] / wi.d[k].abs())
+                .fold(f64::INFINITY, f64::min);
         }
         let vc2 = w[i].vc2;
         w[i].cap2 = w[i].cap2.min(vc2);
@@ -326,28 +354,31 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
     // Pass 4: forward (acceleration).
     u.push(0.0);
     for i in 0..n - 1 {
-        let wi = &w[i];
         let ui = u[i];
-        let next = if wi.len > 0.0 {
-            let a = accel_bound(ui, wi, &w[i + 1].c, 1.0, limits);
-            ui + 2.0 * a * wi.len
+        let next = if w[i].len > 0.0 {
+            let a = accel_bound(ui, &w[i], &w[i + 1].c, 1.0, limits);
+            w[i].a_fwd = a;
+            ui + 2.0 * a * w[i].len
         } else {
             ui
         };
         u.push(next.min(w[i + 1].cap2));
     }
     // Pass 5: backward (deceleration).
+    // A point lowered here gets its forward acceleration recomputed in the time pass
+    // (a_fwd = NaN marks it).
     for i in (0..n - 1).rev() {
-        let wi = &w[i];
         let un = u[i + 1];
-        let lim = if wi.len > 0.0 {
-            let b = accel_bound(un, wi, &w[i + 1].c, -1.0, limits);
-            un + 2.0 * b * wi.len
+        let lim = if w[i].len > 0.0 {
+            let b = accel_bound(un, &w[i], &w[i + 1].c, -1.0, limits);
+            w[i].b_bwd = b;
+            un + 2.0 * b * w[i].len
         } else {
             un
         };
         if lim < u[i] {
             u[i] = lim;
+            w[i].a_fwd = f64::NAN;
         }
     }
 
@@ -357,8 +388,12 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
     for i in 0..n - 1 {
         let wi = &w[i];
         if wi.len > 0.0 {
-            let a = accel_bound(u[i], wi, &w[i + 1].c, 1.0, limits);
-            let b = accel_bound(u[i + 1], wi, &w[i + 1].c, -1.0, limits);
+            let a = if wi.a_fwd.is_nan() {
+                accel_bound(u[i], wi, &w[i + 1].c, 1.0, limits)
+            } else {
+                wi.a_fwd
+            };
+            let b = wi.b_bwd;
             time += segment_time(u[i], u[i + 1], wi.vc2, a, b, wi.len);
         }
         t.push(time);
@@ -398,22 +433,34 @@ fn normal_cap2(c: DVec3, limits: &MachineLimits) -> f64 {
 /// `u0` up to `min(vc², u0 + 2aΔs)`.
 #[inline]
 fn accel_bound(u0: f64, w: &Work, c_far: &DVec3, dir: f64, limits: &MachineLimits) -> f64 {
+    // The tangential acceleration alone also stays within every axis limit, even where the
+    // normal acceleration points against it and the coupled bound would allow more: the
+    // three-point curvature is an estimate, and this keeps "tangential ≤ min_k A_k/|d_k|"
+    // true by itself.
+    let a_tan = w.a_tan;
+    if w.c == DVec3::ZERO && *c_far == DVec3::ZERO {
+        return a_tan; // straight: no normal acceleration
+    }
     let ds = w.len;
     let vc2 = w.vc2.max(u0);
-    let mut a_free = f64::INFINITY;
-    let mut a_cap = f64::INFINITY;
-    for c in [&w.c, c_far] {
-        for k in 0..3 {
-            let dk = w.d[k];
-            let adk = dk.abs();
-            if adk < 1e-12 {
-                continue; // only a speed cap, in vc²
+    let mut a_free = a_tan;
+    let mut a_cap = a_tan;
+    for k in 0..3 {
+        let dk = w.d[k];
+        let adk = dk.abs();
+        if adk < 1e-12 {
+            continue; // no tangential share on this axis: a speed cap, in vc²
+        }
+        let inv = 1.0 / adk;
+        let ak = limits.a_max[k];
+        for ck in [w.c[k], c_far[k]] {
+            if ck == 0.0 {
+                continue; // no coupling: only a_tan
             }
             // Constraint: |dk|·a + σ·u ≤ A_k.
-            let sigma = dir * dk.signum() * c[k];
-            let ak = limits.a_max[k];
-            let at_u0 = (ak - sigma * u0) / adk;
-            let at_cap = (ak - sigma * vc2) / adk;
+            let sigma = dir * dk.signum() * ck;
+            let at_u0 = (ak - sigma * u0) * inv;
+            let at_cap = (ak - sigma * vc2) * inv;
             a_cap = a_cap.min(at_u0).min(at_cap);
             let free = if sigma > 0.0 {
                 // Binding at the end of the phase: |dk|·a + σ(u0 + 2aΔs) ≤ A_k.
@@ -424,16 +471,7 @@ fn accel_bound(u0: f64, w: &Work, c_far: &DVec3, dir: f64, limits: &MachineLimit
             a_free = a_free.min(free);
         }
     }
-    // The tangential acceleration alone also stays within every axis limit, even where the
-    // normal acceleration points against it and the coupled bound would allow more: the
-    // three-point curvature is an estimate, and this keeps "tangential ≤ min_k A_k/|d_k|"
-    // true by itself.
-    let a_tan = (0..3)
-        .filter(|&k| w.d[k].abs() >= 1e-12)
-        .map(|k| limits.a_max[k] / w.d[k].abs())
-        .fold(f64::INFINITY, f64::min);
-    let a_free = a_free.min(a_tan).max(0.0);
-    let a_cap = a_cap.min(a_tan);
+    let a_free = a_free.max(0.0);
     if u0 + 2.0 * a_free * ds <= vc2 {
         a_free
     } else {

@@ -20,7 +20,14 @@ fn push_line(out: &mut Vec<DVec3>, a: DVec3, b: DVec3, spacing: f64) {
 }
 
 /// Append an arc around `center` from angle `start` through `sweep` (radians, positive = CCW).
-fn push_arc(out: &mut Vec<DVec3>, center: DVec3, radius: f64, start: f64, sweep: f64, spacing: f64) {
+fn push_arc(
+    out: &mut Vec<DVec3>,
+    center: DVec3,
+    radius: f64,
+    start: f64,
+    sweep: f64,
+    spacing: f64,
+) {
     let n = steps(radius * sweep.abs(), spacing);
     let first = if out.is_empty() { 0 } else { 1 };
     for i in first..=n {
@@ -45,10 +52,24 @@ pub fn zigzag(width: f64, height: f64, stepover: f64, spacing: f64) -> Vec<DVec3
     let mut out = Vec::new();
     for p in 0..=passes {
         let y = p as f64 * dy;
-        let (x0, x1) = if p % 2 == 0 { (0.0, width) } else { (width, 0.0) };
-        push_line(&mut out, DVec3::new(x0, y, 0.0), DVec3::new(x1, y, 0.0), spacing);
+        let (x0, x1) = if p % 2 == 0 {
+            (0.0, width)
+        } else {
+            (width, 0.0)
+        };
+        push_line(
+            &mut out,
+            DVec3::new(x0, y, 0.0),
+            DVec3::new(x1, y, 0.0),
+            spacing,
+        );
         if p < passes {
-            push_line(&mut out, DVec3::new(x1, y, 0.0), DVec3::new(x1, y + dy, 0.0), spacing);
+            push_line(
+                &mut out,
+                DVec3::new(x1, y, 0.0),
+                DVec3::new(x1, y + dy, 0.0),
+                spacing,
+            );
         }
     }
     out
@@ -65,7 +86,12 @@ pub fn zigzag_rounded(width: f64, height: f64, stepover: f64, spacing: f64) -> V
         let y = p as f64 * dy;
         let forward = p % 2 == 0;
         let (x0, x1) = if forward { (0.0, width) } else { (width, 0.0) };
-        push_line(&mut out, DVec3::new(x0, y, 0.0), DVec3::new(x1, y, 0.0), spacing);
+        push_line(
+            &mut out,
+            DVec3::new(x0, y, 0.0),
+            DVec3::new(x1, y, 0.0),
+            spacing,
+        );
         if p < passes {
             let c = DVec3::new(x1, y + r, 0.0);
             if forward {
@@ -125,7 +151,10 @@ pub fn rounded_pentagon(circumradius: f64, corner_radius: f64, spacing: f64) -> 
 /// Archimedean spiral about the origin, `r = r_start + pitch·θ/2π`, from `r_start` out to
 /// `r_end` (both > 0), with steps of arc length close to `spacing`.
 pub fn spiral(r_start: f64, r_end: f64, pitch: f64, spacing: f64) -> Vec<DVec3> {
-    assert!(r_start > 0.0 && r_end > r_start && pitch > 0.0, "spiral: need 0 < r_start < r_end, pitch > 0");
+    assert!(
+        r_start > 0.0 && r_end > r_start && pitch > 0.0,
+        "spiral: need 0 < r_start < r_end, pitch > 0"
+    );
     let b = pitch / TAU;
     let theta_end = (r_end - r_start) / b;
     let at = |th: f64| {
@@ -168,7 +197,9 @@ mod tests {
     use super::*;
 
     fn max_step(p: &[DVec3]) -> f64 {
-        p.windows(2).map(|w| w[0].distance(w[1])).fold(0.0, f64::max)
+        p.windows(2)
+            .map(|w| w[0].distance(w[1]))
+            .fold(0.0, f64::max)
     }
 
     #[test]

@@ -20,7 +20,10 @@ fn machines() -> Vec<MachineLimits> {
             corner_angle_deg: 10.0,
         },
         // No centripetal cap (the TOPP-RA comparison setting).
-        MachineLimits { a_centripetal: f64::INFINITY, ..hsm },
+        MachineLimits {
+            a_centripetal: f64::INFINITY,
+            ..hsm
+        },
     ]
 }
 
@@ -28,14 +31,20 @@ fn test_paths() -> Vec<(&'static str, Vec<DVec3>)> {
     vec![
         ("zigzag", paths::zigzag(120.0, 60.0, 8.0, 2.0)),
         ("zigzag coarse", paths::zigzag(120.0, 60.0, 8.0, 1000.0)),
-        ("zigzag rounded", paths::zigzag_rounded(120.0, 60.0, 8.0, 0.5)),
+        (
+            "zigzag rounded",
+            paths::zigzag_rounded(120.0, 60.0, 8.0, 0.5),
+        ),
         ("circle", paths::circle(40.0, 0.5)),
         ("small circle", paths::circle(2.0, 0.05)),
         ("rounded pentagon", paths::rounded_pentagon(60.0, 8.0, 0.5)),
         ("sharp pentagon", paths::rounded_pentagon(60.0, 0.0, 1.0)),
         ("spiral", paths::spiral(3.0, 50.0, 4.0, 0.5)),
         ("helix", paths::helix(8.0, 3.0, 2.0, 0.3)),
-        ("line", paths::line(DVec3::ZERO, DVec3::new(30.0, -40.0, 5.0), 1.0)),
+        (
+            "line",
+            paths::line(DVec3::ZERO, DVec3::new(30.0, -40.0, 5.0), 1.0),
+        ),
     ]
 }
 
@@ -95,7 +104,10 @@ fn smooth_paths_keep_axis_acceleration_by_position_differences() {
     // A physical check independent of the model's curvature: second differences of the
     // positions over the scheduled times. On finely sampled smooth paths they approximate the
     // true axis accelerations, so they must stay within the limits up to the sampling error.
-    let m = MachineLimits { a_centripetal: f64::INFINITY, ..MachineLimits::typical_hsm() };
+    let m = MachineLimits {
+        a_centripetal: f64::INFINITY,
+        ..MachineLimits::typical_hsm()
+    };
     for (name, p) in [
         ("circle", paths::circle(40.0, 0.2)),
         ("spiral", paths::spiral(3.0, 50.0, 4.0, 0.2)),
@@ -105,37 +117,48 @@ fn smooth_paths_keep_axis_acceleration_by_position_differences() {
         let s = schedule_polyline_uniform(&p, 1e6, &m);
         let r = common::max_axis_accel_ratio_from_positions(&p, &s, &m);
         assert!(r <= 1.02, "{name}: axis acceleration {r} × the limit");
-        assert!(r >= 0.9, "{name}: the schedule should use the acceleration ({r})");
+        assert!(
+            r >= 0.9,
+            "{name}: the schedule should use the acceleration ({r})"
+        );
     }
 }
 
 /// A random path: a walk with random step lengths and turning angles in 3D, some steps
 /// repeated points, some long straight runs.
 fn random_path() -> impl Strategy<Value = (Vec<DVec3>, Vec<f64>)> {
-    prop::collection::vec((0.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0, 0.0f64..1.0, 1.0f64..600.0), 2..80).prop_map(
-        |steps| {
-            let mut p = vec![DVec3::ZERO];
-            let mut dir = DVec3::X;
-            let mut caps = Vec::new();
-            for (l, yaw, pitch, kind, cap) in steps {
-                let len = if kind < 0.05 {
-                    0.0
-                } else if kind < 0.2 {
-                    20.0 + 80.0 * l
-                } else {
-                    0.01 + 3.0 * l
-                };
-                // Turn by up to ~70° (sometimes a corner, sometimes a smooth bend).
-                let turn = if kind > 0.6 { 0.2 } else { 1.2 };
-                let side = dir.any_orthonormal_pair();
-                dir = (dir + side.0 * yaw * turn + side.1 * pitch * turn * 0.5).normalize();
-                let last = *p.last().unwrap();
-                p.push(last + dir * len);
-                caps.push(cap);
-            }
-            (p, caps)
-        },
+    prop::collection::vec(
+        (
+            0.0f64..1.0,
+            -1.0f64..1.0,
+            -1.0f64..1.0,
+            0.0f64..1.0,
+            1.0f64..600.0,
+        ),
+        2..80,
     )
+    .prop_map(|steps| {
+        let mut p = vec![DVec3::ZERO];
+        let mut dir = DVec3::X;
+        let mut caps = Vec::new();
+        for (l, yaw, pitch, kind, cap) in steps {
+            let len = if kind < 0.05 {
+                0.0
+            } else if kind < 0.2 {
+                20.0 + 80.0 * l
+            } else {
+                0.01 + 3.0 * l
+            };
+            // Turn by up to ~70° (sometimes a corner, sometimes a smooth bend).
+            let turn = if kind > 0.6 { 0.2 } else { 1.2 };
+            let side = dir.any_orthonormal_pair();
+            dir = (dir + side.0 * yaw * turn + side.1 * pitch * turn * 0.5).normalize();
+            let last = *p.last().unwrap();
+            p.push(last + dir * len);
+            caps.push(cap);
+        }
+        (p, caps)
+    })
 }
 
 fn random_limits() -> impl Strategy<Value = MachineLimits> {
@@ -145,12 +168,14 @@ fn random_limits() -> impl Strategy<Value = MachineLimits> {
         prop_oneof![Just(f64::INFINITY), 100.0f64..20000.0],
         5.0f64..90.0,
     )
-        .prop_map(|(v_max, a_max, a_centripetal, corner_angle_deg)| MachineLimits {
-            v_max,
-            a_max,
-            a_centripetal,
-            corner_angle_deg,
-        })
+        .prop_map(
+            |(v_max, a_max, a_centripetal, corner_angle_deg)| MachineLimits {
+                v_max,
+                a_max,
+                a_centripetal,
+                corner_angle_deg,
+            },
+        )
 }
 
 proptest! {

@@ -18,13 +18,20 @@ fn line_time(l: f64, v: f64, a: f64) -> f64 {
 
 fn assert_rel(ours: f64, reference: f64, tol: f64, what: &str) {
     let rel = (ours - reference).abs() / reference;
-    assert!(rel <= tol, "{what}: ours {ours}, reference {reference}, relative error {rel:e}");
+    assert!(
+        rel <= tol,
+        "{what}: ours {ours}, reference {reference}, relative error {rel:e}"
+    );
 }
 
 #[test]
 fn straight_line_matches_closed_form() {
     let m = MachineLimits::typical_hsm(); // 500 mm/s, 5000 mm/s²: D = 25 mm
-    for dir in [DVec3::X, DVec3::new(3.0, 4.0, 0.0).normalize(), DVec3::new(1.0, -2.0, 2.0).normalize()] {
+    for dir in [
+        DVec3::X,
+        DVec3::new(3.0, 4.0, 0.0).normalize(),
+        DVec3::new(1.0, -2.0, 2.0).normalize(),
+    ] {
         // Governing axis: the one with the largest component.
         let dmax = dir.abs().max_element();
         let (v, a) = (500.0 / dmax, 5000.0 / dmax);
@@ -32,11 +39,21 @@ fn straight_line_matches_closed_form() {
             for spacing in [0.1, 0.7, 3.0, 1e9] {
                 let p = paths::line(DVec3::ZERO, dir * l, spacing);
                 let s = schedule_polyline_uniform(&p, 1e6, &m);
-                assert_rel(s.total_time, line_time(l, v, a), 1e-6, &format!("line {l} mm along {dir}, spacing {spacing}"));
+                assert_rel(
+                    s.total_time,
+                    line_time(l, v, a),
+                    1e-6,
+                    &format!("line {l} mm along {dir}, spacing {spacing}"),
+                );
                 common::check(&p, &vec![1e6; p.len() - 1], &m, &s);
                 // And with a feed cap below the machine's limit.
                 let s = schedule_polyline_uniform(&p, 120.0, &m);
-                assert_rel(s.total_time, line_time(l, 120.0, a), 1e-6, &format!("line {l} at 120 mm/s"));
+                assert_rel(
+                    s.total_time,
+                    line_time(l, 120.0, a),
+                    1e-6,
+                    &format!("line {l} at 120 mm/s"),
+                );
             }
         }
     }
@@ -58,7 +75,9 @@ fn circle_matches_constant_centripetal_speed() {
         let length: f64 = p.windows(2).map(|w| w[0].distance(w[1])).sum();
         let v = (5000.0 * r).sqrt();
         assert_rel(s.total_time, length / v, 1e-6, &format!("circle R{r}"));
-        assert!(s.v[1..p.len() - 1].iter().all(|&x| (x - v).abs() < 1e-9 * v));
+        assert!(s.v[1..p.len() - 1]
+            .iter()
+            .all(|&x| (x - v).abs() < 1e-9 * v));
         common::check(&p, &vec![1e6; p.len() - 1], &m, &s);
     }
 }
@@ -66,7 +85,10 @@ fn circle_matches_constant_centripetal_speed() {
 #[test]
 fn circle_below_feed_cap_and_axis_limits() {
     // Centripetal-limited speed above the feed cap: the feed cap rules.
-    let m = MachineLimits { a_max: [1e13; 3], ..MachineLimits::typical_hsm() };
+    let m = MachineLimits {
+        a_max: [1e13; 3],
+        ..MachineLimits::typical_hsm()
+    };
     let p = paths::circle(50.0, 0.5);
     let s = schedule_polyline_uniform(&p, 200.0, &m);
     let length: f64 = p.windows(2).map(|w| w[0].distance(w[1])).sum();
@@ -79,7 +101,10 @@ fn circle_below_feed_cap_and_axis_limits() {
 #[test]
 fn line_with_varying_feed_caps_matches_brute_force() {
     let a = 5000.0;
-    let m = MachineLimits { v_max: [1e6; 3], ..MachineLimits::typical_hsm() };
+    let m = MachineLimits {
+        v_max: [1e6; 3],
+        ..MachineLimits::typical_hsm()
+    };
     // Deterministic pseudo-random segment lengths and caps.
     let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut rnd = || {
@@ -131,10 +156,15 @@ fn line_with_varying_feed_caps_matches_brute_force() {
 fn finer_sampling_converges() {
     // The schedule is conservative by O(spacing) on curves and converges as the sampling is
     // refined: the time decreases towards a limit.
-    let m = MachineLimits { a_centripetal: f64::INFINITY, ..MachineLimits::typical_hsm() };
+    let m = MachineLimits {
+        a_centripetal: f64::INFINITY,
+        ..MachineLimits::typical_hsm()
+    };
     let times: Vec<f64> = [1.0, 0.5, 0.25, 0.125]
         .iter()
-        .map(|&h| schedule_polyline_uniform(&paths::rounded_pentagon(60.0, 10.0, h), 1e6, &m).total_time)
+        .map(|&h| {
+            schedule_polyline_uniform(&paths::rounded_pentagon(60.0, 10.0, h), 1e6, &m).total_time
+        })
         .collect();
     for w in times.windows(2) {
         assert!(w[1] < w[0], "{times:?}");

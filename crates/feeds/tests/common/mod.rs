@@ -37,7 +37,9 @@ pub fn geometry(p: &[DVec3], limits: &MachineLimits) -> Geometry {
         // Nearest non-degenerate segments before and after j.
         let before = (0..j).rev().find(|&i| len[i] > 0.0);
         let after = (j..n - 1).find(|&i| len[i] > 0.0);
-        let (Some(b), Some(a)) = (before, after) else { continue };
+        let (Some(b), Some(a)) = (before, after) else {
+            continue;
+        };
         let (u, w) = (dir[b] * len[b], dir[a] * len[a]);
         let angle = u.angle_between(w).to_degrees();
         if angle > limits.corner_angle_deg {
@@ -61,7 +63,12 @@ pub fn geometry(p: &[DVec3], limits: &MachineLimits) -> Geometry {
         curv[0] = curv[1];
         curv[n - 1] = curv[n - 2];
     }
-    Geometry { dir, len, curv, corner }
+    Geometry {
+        dir,
+        len,
+        curv,
+        corner,
+    }
 }
 
 /// Largest violation ratio found (≤ 1 + TOL means fine), with a description.
@@ -82,13 +89,21 @@ impl Report {
 /// Check a schedule against the limits; panics with the worst violation.
 pub fn check(p: &[DVec3], caps: &[f64], limits: &MachineLimits, s: &Schedule) {
     let r = violations(p, caps, limits, s);
-    assert!(r.worst <= 1.0 + TOL, "limit violated: ratio {} at {}", r.worst, r.what);
+    assert!(
+        r.worst <= 1.0 + TOL,
+        "limit violated: ratio {} at {}",
+        r.worst,
+        r.what
+    );
 }
 
 pub fn violations(p: &[DVec3], caps: &[f64], limits: &MachineLimits, s: &Schedule) -> Report {
     let n = p.len();
     let g = geometry(p, limits);
-    let mut rep = Report { worst: 0.0, what: String::new() };
+    let mut rep = Report {
+        worst: 0.0,
+        what: String::new(),
+    };
     assert_eq!((s.s.len(), s.v.len(), s.t.len()), (n, n, n));
     if n == 0 {
         return rep;
@@ -99,17 +114,31 @@ pub fn violations(p: &[DVec3], caps: &[f64], limits: &MachineLimits, s: &Schedul
     assert!(s.v.iter().all(|v| v.is_finite() && *v >= 0.0));
     for i in 0..n - 1 {
         let ds = p[i].distance(p[i + 1]);
-        assert!((s.s[i + 1] - s.s[i] - ds).abs() <= 1e-9 * (1.0 + s.s[i + 1]), "arc length at {i}");
+        assert!(
+            (s.s[i + 1] - s.s[i] - ds).abs() <= 1e-9 * (1.0 + s.s[i + 1]),
+            "arc length at {i}"
+        );
         assert!(s.t[i + 1] >= s.t[i], "time goes back at {i}");
     }
     assert_eq!(s.total_time, s.t[n - 1]);
     assert_eq!(s.length, s.s[n - 1]);
     // Ends and corners at rest.
-    rep.see(if s.v[0] == 0.0 { 0.0 } else { f64::INFINITY }, || "v at start".into());
-    rep.see(if s.v[n - 1] == 0.0 { 0.0 } else { f64::INFINITY }, || "v at end".into());
+    rep.see(if s.v[0] == 0.0 { 0.0 } else { f64::INFINITY }, || {
+        "v at start".into()
+    });
+    rep.see(
+        if s.v[n - 1] == 0.0 {
+            0.0
+        } else {
+            f64::INFINITY
+        },
+        || "v at end".into(),
+    );
     for j in 0..n {
         if g.corner[j] {
-            rep.see(if s.v[j] == 0.0 { 0.0 } else { f64::INFINITY }, || format!("v at corner {j}"));
+            rep.see(if s.v[j] == 0.0 { 0.0 } else { f64::INFINITY }, || {
+                format!("v at corner {j}")
+            });
         }
     }
     for i in 0..n - 1 {
@@ -127,8 +156,12 @@ pub fn violations(p: &[DVec3], caps: &[f64], limits: &MachineLimits, s: &Schedul
         // differences of the positions.
         for k in 0..3 {
             let vk = limits.v_max[k];
-            rep.see(v0.max(v1) * d[k].abs() / vk, || format!("axis {k} velocity at segment {i}"));
-            rep.see((p[i + 1][k] - p[i][k]).abs() / dt / vk, || format!("axis {k} mean velocity, segment {i}"));
+            rep.see(v0.max(v1) * d[k].abs() / vk, || {
+                format!("axis {k} velocity at segment {i}")
+            });
+            rep.see((p[i + 1][k] - p[i][k]).abs() / dt / vk, || {
+                format!("axis {k} mean velocity, segment {i}")
+            });
         }
         // Tangential acceleration: from v² over s, and from v over t.
         let a_lim = (0..3)
@@ -136,10 +169,14 @@ pub fn violations(p: &[DVec3], caps: &[f64], limits: &MachineLimits, s: &Schedul
             .map(|k| limits.a_max[k] / d[k].abs())
             .fold(f64::INFINITY, f64::min);
         let a_s = (v1 * v1 - v0 * v0) / (2.0 * len);
-        rep.see(a_s.abs() / a_lim, || format!("tangential acceleration (v²/2s) on segment {i}"));
+        rep.see(a_s.abs() / a_lim, || {
+            format!("tangential acceleration (v²/2s) on segment {i}")
+        });
         if dt > 0.0 {
             let a_t = (v1 - v0) / dt;
-            rep.see(a_t.abs() / a_lim, || format!("tangential acceleration (dv/dt) on segment {i}"));
+            rep.see(a_t.abs() / a_lim, || {
+                format!("tangential acceleration (dv/dt) on segment {i}")
+            });
         }
         // Per-axis acceleration, tangential plus normal, at both end points.
         for (j, u) in [(i, v0 * v0), (i + 1, v1 * v1)] {
@@ -155,14 +192,20 @@ pub fn violations(p: &[DVec3], caps: &[f64], limits: &MachineLimits, s: &Schedul
     // Centripetal acceleration.
     for j in 1..n - 1 {
         let k = g.curv[j].length();
-        rep.see(s.v[j] * s.v[j] * k / limits.a_centripetal, || format!("centripetal at point {j}"));
+        rep.see(s.v[j] * s.v[j] * k / limits.a_centripetal, || {
+            format!("centripetal at point {j}")
+        });
     }
     rep
 }
 
 /// Per-axis acceleration by second differences of the positions over the scheduled times,
 /// divided by the axis limit; the largest over the interior points with distinct times.
-pub fn max_axis_accel_ratio_from_positions(p: &[DVec3], s: &Schedule, limits: &MachineLimits) -> f64 {
+pub fn max_axis_accel_ratio_from_positions(
+    p: &[DVec3],
+    s: &Schedule,
+    limits: &MachineLimits,
+) -> f64 {
     let mut worst: f64 = 0.0;
     for j in 1..p.len() - 1 {
         let (dt0, dt1) = (s.t[j] - s.t[j - 1], s.t[j + 1] - s.t[j]);
