@@ -126,13 +126,7 @@ fn bad_part_files_exit_3_with_a_json_error_naming_the_file() {
 #[test]
 fn knowledge_problems_exit_4() {
     let d = tmp("knowledge");
-    for sub in ["machines", "tools", "materials"] {
-        std::fs::create_dir_all(d.join(sub)).unwrap();
-        for e in std::fs::read_dir(repo().join("knowledge").join(sub)).unwrap() {
-            let p = e.unwrap().path();
-            std::fs::copy(&p, d.join(sub).join(p.file_name().unwrap())).unwrap();
-        }
-    }
+    copy_dir(&repo().join("knowledge"), &d);
     let out = thinplan().arg("check-knowledge").arg(&d).output().unwrap();
     assert_eq!(out.status.code(), Some(0));
 
@@ -187,5 +181,18 @@ fn samples_are_listed_and_each_inspects() {
         assert_eq!(code, 0, "{name}: {v}");
         assert_eq!(v["solids"], 1, "{name}");
         assert!(v["volume"].as_f64().unwrap() > 0.0);
+    }
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        let target = to.join(p.file_name().unwrap());
+        if p.is_dir() {
+            copy_dir(&p, &target);
+        } else {
+            std::fs::copy(&p, &target).unwrap();
+        }
     }
 }

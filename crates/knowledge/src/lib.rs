@@ -14,10 +14,12 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 pub mod load;
+pub mod recognition;
 pub mod resources;
 pub mod sizing;
 
 pub use load::{load_ron, parse_ron, KnowledgeError};
+pub use recognition::*;
 pub use resources::*;
 pub use sizing::*;
 
@@ -29,11 +31,21 @@ pub struct Knowledge {
     pub machines: BTreeMap<String, Machine>,
     pub tool_sets: BTreeMap<String, ToolSet>,
     pub materials: BTreeMap<String, Material>,
-    /// Constants of the wall sizing model (`sizing.ron` at the knowledge
-    /// root). A directory without `sizing.ron` gets the embedded copy, the
-    /// table A.2 defaults ("used when no other value is passed in").
+    /// Constants of the wall sizing model (`sizing.ron`).
     pub sizing: SizingKnowledge,
+    /// Thresholds for recognising walls (`recognition_walls.ron`).
+    pub wall_recognition: WallRecognition,
+    /// Thresholds for recognising depressions and details
+    /// (`recognition_depressions.ron`).
+    pub depression_recognition: DepressionRecognition,
 }
+
+/// Files at the knowledge root; each is required.
+pub const ROOT_FILES: [&str; 3] = [
+    SIZING_FILE,
+    "recognition_walls.ron",
+    "recognition_depressions.ron",
+];
 
 /// The embedded copy of the repository's `knowledge/` directory:
 /// `(relative path, text)`.
@@ -50,11 +62,16 @@ const BUILTIN: &[(&str, &str)] = &[
         "materials/al7075.ron",
         include_str!("../../../knowledge/materials/al7075.ron"),
     ),
-    ("sizing.ron", BUILTIN_SIZING),
+    ("sizing.ron", include_str!("../../../knowledge/sizing.ron")),
+    (
+        "recognition_walls.ron",
+        include_str!("../../../knowledge/recognition_walls.ron"),
+    ),
+    (
+        "recognition_depressions.ron",
+        include_str!("../../../knowledge/recognition_depressions.ron"),
+    ),
 ];
-
-/// The embedded `knowledge/sizing.ron`.
-const BUILTIN_SIZING: &str = include_str!("../../../knowledge/sizing.ron");
 
 /// The name of the sizing file at the knowledge root.
 pub const SIZING_FILE: &str = "sizing.ron";
@@ -106,12 +123,14 @@ impl Knowledge {
                 Err(e) => errors.push(e),
             }
         }
-        let sizing = dir.join(SIZING_FILE);
-        if sizing.exists() {
-            match std::fs::read_to_string(&sizing) {
-                Ok(t) => files.push((sizing, t)),
+        for name in ROOT_FILES {
+            let path = dir.join(name);
+            match std::fs::read_to_string(&path) {
+                Ok(t) => files.push((path, t)),
+                // A missing root file is reported once, by `from_files`.
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
                 Err(e) => errors.push(KnowledgeError::Read {
-                    path: sizing,
+                    path,
                     reason: e.to_string(),
                 }),
             }
@@ -126,16 +145,14 @@ impl Knowledge {
         }
     }
 
-    /// Builds knowledge from `(path, text)` pairs; the first path component
-    /// below the knowledge root (`machines`, `tools`, `materials`) says what
-    /// a file holds; `sizing.ron` outside those folders is the sizing
-    /// knowledge (the embedded one when no such file is given).
+    /// Builds knowledge from `(path, text)` pairs: files in `machines/`,
+    /// `tools/` and `materials/` by their folder, the [`ROOT_FILES`] by name.
     pub fn from_files(
         origin: &str,
         files: &[(PathBuf, String)],
     ) -> Result<Knowledge, Vec<KnowledgeError>> {
-        let mut sizing: Option<SizingKnowledge> = None;
-        let mut sizing_errors = Vec::new();
+        let mut root: BTreeMap<&str, (&PathBuf, &String)> = BTreeMap::new();
+        let mut errors = Vec::new();
         let mut rest = Vec::new();
         for (path, text) in files {
             let parent = path
@@ -143,34 +160,31 @@ impl Knowledge {
                 .and_then(|p| p.file_name())
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
-            let is_sizing = path.file_name().is_some_and(|n| n == SIZING_FILE)
-                && !matches!(parent.as_str(), "machines" | "tools" | "materials");
-            if !is_sizing {
-                rest.push((path, text, parent));
-            } else if sizing.is_some() {
-                sizing_errors.push(KnowledgeError::Invalid {
-                    path: path.clone(),
-                    reason: "a second sizing.ron".into(),
-                });
-            } else {
-                match parse_ron::<SizingKnowledge>(text, path) {
-                    Ok(s) => sizing = Some(s),
-                    Err(e) => sizing_errors.push(e),
+            let name = path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let root_name = ROOT_FILES.iter().find(|r| **r == name);
+            match root_name {
+                Some(r) if !matches!(parent.as_str(), "machines" | "tools" | "materials") => {
+                    if root.insert(r, (path, text)).is_some() {
+                        errors.push(KnowledgeError::Invalid {
+                            path: path.clone(),
+                            reason: format!("a second {r}"),
+                        });
+                    }
                 }
+                _ => rest.push((path, text, parent)),
             }
         }
-        let sizing = match sizing {
-            Some(s) => s,
-            None => match parse_ron::<SizingKnowledge>(
-                BUILTIN_SIZING,
-                Path::new("builtin:knowledge/sizing.ron"),
-            ) {
-                Ok(s) => s,
-                Err(e) => {
-                    sizing_errors.push(e);
-                    return Err(sizing_errors);
-                }
-            },
+        let sizing = parse_root::<SizingKnowledge>(&root, SIZING_FILE, origin, &mut errors);
+        let walls = parse_root::<WallRecognition>(&root, ROOT_FILES[1], origin, &mut errors);
+        let depressions =
+            parse_root::<DepressionRecognition>(&root, ROOT_FILES[2], origin, &mut errors);
+        let (Some(sizing), Some(wall_recognition), Some(depression_recognition)) =
+            (sizing, walls, depressions)
+        else {
+            return Err(errors);
         };
         let mut c = Collector {
             k: Some(Knowledge {
@@ -179,8 +193,10 @@ impl Knowledge {
                 tool_sets: BTreeMap::new(),
                 materials: BTreeMap::new(),
                 sizing,
+                wall_recognition,
+                depression_recognition,
             }),
-            errors: sizing_errors,
+            errors,
         };
         for (path, text, parent) in rest {
             match parent.as_str() {
@@ -214,6 +230,31 @@ impl Knowledge {
 
     pub fn material(&self, id: &str) -> Option<&Material> {
         self.materials.get(id)
+    }
+}
+
+/// Parses one required root file, recording a problem when it is missing or bad.
+fn parse_root<T: serde::de::DeserializeOwned>(
+    root: &BTreeMap<&str, (&PathBuf, &String)>,
+    name: &str,
+    origin: &str,
+    errors: &mut Vec<KnowledgeError>,
+) -> Option<T> {
+    match root.get(name) {
+        Some((path, text)) => match parse_ron::<T>(text, path) {
+            Ok(v) => Some(v),
+            Err(e) => {
+                errors.push(e);
+                None
+            }
+        },
+        None => {
+            errors.push(KnowledgeError::Invalid {
+                path: PathBuf::from(origin).join(name),
+                reason: format!("missing {name}: every knowledge directory needs it"),
+            });
+            None
+        }
     }
 }
 

@@ -14,6 +14,10 @@ fn repository_knowledge_loads_and_equals_the_embedded_copy() {
     assert_eq!(dir.tool_sets, builtin.tool_sets);
     assert_eq!(dir.materials, builtin.materials);
     assert_eq!(dir.sizing, builtin.sizing);
+    // Everything else too (the whole value but its origin).
+    let mut same = builtin.clone();
+    same.origin = dir.origin.clone();
+    assert_eq!(dir, same);
     assert!(dir.machine(DEFAULT_MACHINE).is_some());
     let tools = dir.tool_set(DEFAULT_TOOL_SET).unwrap();
     let mut diameters: Vec<f64> = tools.tools.iter().map(|t| t.diameter).collect();
@@ -35,7 +39,9 @@ fn copy_of_knowledge(tag: &str) -> PathBuf {
             std::fs::copy(&p, d.join(sub).join(p.file_name().unwrap())).unwrap();
         }
     }
-    std::fs::copy(repo_knowledge().join(SIZING_FILE), d.join(SIZING_FILE)).unwrap();
+    for name in ROOT_FILES {
+        std::fs::copy(repo_knowledge().join(name), d.join(name)).unwrap();
+    }
     d
 }
 
@@ -188,11 +194,15 @@ fn sizing_syntax_and_unknown_fields_point_at_the_file() {
 }
 
 #[test]
-fn a_directory_without_sizing_gets_the_embedded_defaults() {
-    let d = copy_of_knowledge("sizing-absent");
-    std::fs::remove_file(d.join(SIZING_FILE)).unwrap();
-    let k = Knowledge::load_dir(&d).unwrap();
-    assert_eq!(k.sizing, Knowledge::builtin().unwrap().sizing);
+fn a_directory_without_a_root_file_is_refused_naming_it() {
+    for name in ROOT_FILES {
+        let d = copy_of_knowledge(&format!("absent-{name}"));
+        std::fs::remove_file(d.join(name)).unwrap();
+        let errors = Knowledge::load_dir(&d).unwrap_err();
+        assert_eq!(errors.len(), 1, "{errors:?}");
+        let msg = errors[0].to_string();
+        assert!(msg.contains(&format!("missing {name}")), "{msg}");
+    }
 }
 
 #[test]
