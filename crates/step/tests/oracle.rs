@@ -110,5 +110,8 @@ fn real_files_agree_with_occ() {
 #[test]
 fn oracle_unit_files_agree_with_occ() {
     let dir = oracle_dir().join("units");
-    compare(&dir.join("occ_units_reference.json"), &[dir.clone()]);
+    compare(
+        &dir.join("occ_units_reference.json"),
+        std::slice::from_ref(&dir),
+    );
 }
