@@ -250,7 +250,7 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
     for &ld in &cfg.l_over_d {
         let l = ld * d;
         for bp in bench_family(l) {
-            if !cfg.pockets.is_empty() && !cfg.pockets.iter().any(|p| *p == bp.pocket.name) {
+            if !cfg.pockets.is_empty() && !cfg.pockets.contains(&bp.pocket.name) {
                 continue;
             }
             let params = bench_params(&bp);

@@ -10,13 +10,16 @@ use std::collections::HashMap;
 use crate::fem::Mesh;
 use crate::geom::signed_area;
 
+/// A mesh edge (sorted vertex pair) and its up to two contour neighbours.
+type EdgeKey = (u32, u32);
+
 /// Closed contour loops of `u = level`, each counter-clockwise (higher u on the left for a
 /// contour around a maximum). Open chains cannot occur when u ≤ level on the boundary.
 pub fn contour_loops(mesh: &Mesh, u: &[f64], level: f64) -> Vec<Vec<DVec2>> {
     // crossing point per mesh edge (key = sorted vertex pair); each triangle crossed by the
     // level contributes one segment joining two edge keys
     let mut point: HashMap<(u32, u32), DVec2> = HashMap::new();
-    let mut adj: HashMap<(u32, u32), [Option<(u32, u32)>; 2]> = HashMap::new();
+    let mut adj: HashMap<EdgeKey, [Option<EdgeKey>; 2]> = HashMap::new();
     let key = |a: u32, b: u32| if a < b { (a, b) } else { (b, a) };
     for t in &mesh.triangles {
         let above = t.map(|i| u[i as usize] > level);

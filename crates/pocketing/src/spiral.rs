@@ -157,6 +157,7 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
 
 /// Sample `f` on t ∈ [0, 1] at `n` even steps, bisecting any step longer than `step`.
 fn sample_turn(f: impl Fn(f64) -> DVec2, n: usize, step: f64) -> Vec<DVec2> {
+    #[allow(clippy::too_many_arguments)]
     fn rec(
         f: &dyn Fn(f64) -> DVec2,
         t0: f64,

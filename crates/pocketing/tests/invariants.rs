@@ -177,9 +177,9 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 6, ..ProptestConfig::default() })]
     #[test]
     fn random_star_shaped_pockets(
-        a2 in 0.0..0.12f64, p2 in 0.0..6.28f64,
-        a3 in 0.0..0.06f64, p3 in 0.0..6.28f64,
-        a4 in 0.0..0.03f64, p4 in 0.0..6.28f64,
+        a2 in 0.0..0.12f64, p2 in 0.0..std::f64::consts::TAU,
+        a3 in 0.0..0.06f64, p3 in 0.0..std::f64::consts::TAU,
+        a4 in 0.0..0.03f64, p4 in 0.0..std::f64::consts::TAU,
         size in 40.0..160.0f64,
     ) {
         let pocket = star_pocket(&[(a2, p2), (a3, p3), (a4, p4)], size);
