@@ -77,6 +77,26 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Size a wall's machining features with the sizing model (§4.1.2):
+    /// B_RF, h and H that keep the modelled deflection within the allowed value.
+    #[command(allow_negative_numbers = true)]
+    SizeWall {
+        /// Wall length L, mm.
+        length: f64,
+        /// Final wall thickness t, mm.
+        thickness: f64,
+        /// Wall height H_w, mm.
+        height: f64,
+        /// `peripheral` or `face` milling.
+        #[arg(long, default_value = "peripheral")]
+        mode: String,
+        #[arg(long, default_value = thinplan_knowledge::DEFAULT_MATERIAL)]
+        material: String,
+        #[arg(long)]
+        knowledge: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
     /// List the bundled sample parts.
     Samples,
 }
@@ -88,6 +108,7 @@ fn main() -> ExitCode {
         Command::Inspect { json: true, .. }
             | Command::Plan { json: true, .. }
             | Command::CheckKnowledge { json: true, .. }
+            | Command::SizeWall { json: true, .. }
     );
     let result = std::panic::catch_unwind(|| run(cli.command)).unwrap_or_else(|_| {
         Err(CliError {
@@ -124,6 +145,25 @@ fn run(command: Command) -> Result<(), CliError> {
             json,
         ),
         Command::CheckKnowledge { dir, json } => check_knowledge(dir.as_deref(), json),
+        Command::SizeWall {
+            length,
+            thickness,
+            height,
+            mode,
+            material,
+            knowledge,
+            json,
+        } => size_wall(
+            thinplan_sizing::Wall {
+                length,
+                thickness,
+                height,
+            },
+            &mode,
+            &material,
+            knowledge.as_deref(),
+            json,
+        ),
         Command::Samples => {
             for (name, _) in thinplan_import::SAMPLES {
                 println!("builtin:{name}");
@@ -472,4 +512,72 @@ fn default_out(source: &str) -> PathBuf {
             name.split('.').next().unwrap_or("part").to_string()
         });
     PathBuf::from("out").join(format!("{stem}.plan.json"))
+}
+
+fn size_wall(
+    wall: thinplan_sizing::Wall,
+    mode: &str,
+    material: &str,
+    knowledge_dir: Option<&Path>,
+    json: bool,
+) -> Result<(), CliError> {
+    let k = load_knowledge(knowledge_dir)?;
+    let mode = match mode {
+        "peripheral" => thinplan_sizing::MillingMode::Peripheral,
+        "face" => thinplan_sizing::MillingMode::Face,
+        other => {
+            return Err(CliError {
+                code: exit::BAD_INPUT,
+                kind: "input",
+                message: format!("--mode `{other}`: expected `peripheral` or `face`"),
+            })
+        }
+    };
+    let m = k.material(material).ok_or_else(|| CliError {
+        code: exit::KNOWLEDGE,
+        kind: "knowledge",
+        message: format!("no material `{material}` in {}", k.origin),
+    })?;
+    let sized =
+        thinplan_sizing::size_wall(&wall, &k.sizing, m.youngs_modulus, mode).map_err(|e| {
+            CliError {
+                code: exit::BAD_INPUT,
+                kind: "sizing",
+                message: e.to_string(),
+            }
+        })?;
+    if json {
+        let provenance: std::collections::BTreeMap<&str, f64> = sized
+            .provenance
+            .iter()
+            .map(|(n, v)| (n.as_str(), *v))
+            .collect();
+        let v = serde_json::json!({
+            "wall": {"length": wall.length, "thickness": wall.thickness, "height": wall.height},
+            "mode": mode.name(),
+            "material": material,
+            "b_rf": sized.b_rf,
+            "h": sized.h,
+            "big_h": sized.big_h,
+            "deflection": sized.deflection,
+            "allowed_deflection": k.sizing.allowed_deflection,
+            "iterations": sized.iterations,
+            "provenance": provenance,
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "wall {}x{}x{} mm, {} milling, {}:",
+            wall.length,
+            wall.thickness,
+            wall.height,
+            mode.name(),
+            material
+        );
+        println!(
+            "  B_RF {:.2} mm, h {:.2} mm, H {:.2} mm; deflection {:.4} mm (allowed {} mm)",
+            sized.b_rf, sized.h, sized.big_h, sized.deflection, k.sizing.allowed_deflection
+        );
+    }
+    Ok(())
 }

@@ -196,3 +196,18 @@ fn copy_dir(from: &Path, to: &Path) {
         }
     }
 }
+
+#[test]
+fn size_wall_gives_the_sizes_that_machined_well_in_appendix_a() {
+    // Appendix A, test 9: a 120×1×72 wall machined well with B_RF = 11,
+    // h = 12, H = 36; H = 48 (test 10) and H = 72 (test 8) vibrated.
+    let (code, v) = run_json(thinplan().args(["size-wall", "120", "1", "72", "--json"]));
+    assert_eq!(code, 0, "{v}");
+    assert_eq!(v["b_rf"], 11.0);
+    assert_eq!(v["h"], 12.0);
+    assert_eq!(v["big_h"], 36.0);
+    assert!(v["deflection"].as_f64().unwrap() <= v["allowed_deflection"].as_f64().unwrap());
+    assert!(v["provenance"]["max_milling_force"].as_f64().is_some());
+    let (code, v) = run_json(thinplan().args(["size-wall", "120", "-1", "72", "--json"]));
+    assert_eq!(code, 3, "{v}");
+}
