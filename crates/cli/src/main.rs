@@ -13,6 +13,8 @@ use thinplan_import::{ImportError, ImportedPart};
 use thinplan_knowledge::Knowledge;
 use thinplan_plan::{Plan, Provenance, ProvenanceSource, Setup};
 
+mod pocket_cmd;
+
 /// Exit codes (documented in docs/CLI.md).
 mod exit {
     pub const OK: u8 = 0;
@@ -32,6 +34,16 @@ mod exit {
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+#[derive(Subcommand)]
+enum BenchWhat {
+    /// Curvilinear spiral vs parallel offset vs FreeCAD Adaptive on a set of
+    /// pockets, all timed with the same feed schedule.
+    Pockets {
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 #[derive(Subcommand)]
@@ -97,6 +109,22 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Benchmarks printed as tables (or JSON rows).
+    Bench {
+        #[command(subcommand)]
+        what: BenchWhat,
+    },
+    /// Plan one closed pocket with the curvilinear spiral and write it.
+    Pocket {
+        /// Pocket profile file (see docs/CLI.md).
+        profile: PathBuf,
+        /// Write a picture of the pocket, the contours and the spiral.
+        #[arg(long)]
+        svg: Option<PathBuf>,
+        /// The spiral as points / arcs with feeds, as JSON on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// List the bundled sample parts.
     Samples,
 }
@@ -109,6 +137,10 @@ fn main() -> ExitCode {
             | Command::Plan { json: true, .. }
             | Command::CheckKnowledge { json: true, .. }
             | Command::SizeWall { json: true, .. }
+            | Command::Pocket { json: true, .. }
+            | Command::Bench {
+                what: BenchWhat::Pockets { json: true }
+            }
     );
     let result = std::panic::catch_unwind(|| run(cli.command)).unwrap_or_else(|_| {
         Err(CliError {
@@ -164,6 +196,20 @@ fn run(command: Command) -> Result<(), CliError> {
             knowledge.as_deref(),
             json,
         ),
+        Command::Bench {
+            what: BenchWhat::Pockets { json },
+        } => pocket_cmd::bench_pockets(json).map_err(|message| CliError {
+            code: exit::INTERNAL,
+            kind: "bench",
+            message,
+        }),
+        Command::Pocket { profile, svg, json } => {
+            pocket_cmd::pocket(&profile, svg.as_deref(), json).map_err(|message| CliError {
+                code: exit::BAD_INPUT,
+                kind: "input",
+                message,
+            })
+        }
         Command::Samples => {
             for (name, _) in thinplan_import::SAMPLES {
                 println!("builtin:{name}");
