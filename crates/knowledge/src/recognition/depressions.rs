@@ -3,6 +3,19 @@
 
 use serde::{Deserialize, Serialize};
 
+/// The kinds of depressions and details the recogniser may report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum DepressionKind {
+    Hole,
+    Cutout,
+    Slot,
+    Notch,
+    Pocket,
+    Step,
+    Chamfer,
+    Fillet,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DepressionRecognition {
@@ -15,4 +28,46 @@ pub struct DepressionRecognition {
     pub max_chamfer_width: f64,
     /// A fillet is a concave or convex cylindrical blend of at most this radius, mm.
     pub max_fillet_radius: f64,
+    /// A chamfer is inclined to its neighbours by at least this angle and at
+    /// most 90° minus it, degrees.
+    #[serde(default = "default_min_chamfer_incline_deg")]
+    pub min_chamfer_incline_deg: f64,
+    /// Profile corners within this many degrees of 90° count as right angles
+    /// (rectangular profiles, rectangular blind steps).
+    #[serde(default = "default_right_angle_tolerance_deg")]
+    pub right_angle_tolerance_deg: f64,
+    /// The kinds to recognise, in priority order: when a face set can be read
+    /// as two kinds (e.g. a narrow inclined face: chamfer or slanted step) the
+    /// kind listed first wins; a kind left out is not recognised (its faces
+    /// stay plain part faces).
+    #[serde(default = "default_priority")]
+    pub priority: Vec<DepressionKind>,
+}
+
+fn default_min_chamfer_incline_deg() -> f64 {
+    5.0
+}
+
+fn default_right_angle_tolerance_deg() -> f64 {
+    1.0
+}
+
+fn default_priority() -> Vec<DepressionKind> {
+    use DepressionKind::*;
+    vec![Hole, Pocket, Slot, Cutout, Notch, Step, Chamfer, Fillet]
+}
+
+impl DepressionRecognition {
+    /// Whether `kind` is enabled.
+    pub fn recognises(&self, kind: DepressionKind) -> bool {
+        self.priority.contains(&kind)
+    }
+
+    /// Rank of `kind` in the priority list (lower wins); disabled kinds last.
+    pub fn rank(&self, kind: DepressionKind) -> usize {
+        self.priority
+            .iter()
+            .position(|k| *k == kind)
+            .unwrap_or(usize::MAX)
+    }
 }
