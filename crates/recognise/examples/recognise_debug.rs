@@ -1,0 +1,41 @@
+//! Prints what recognition finds on sample parts (debug aid).
+use glam::DVec3;
+fn main() {
+    let k = thinplan_knowledge::Knowledge::builtin().unwrap();
+    let m = k.machines["hsm_5axis"].clone();
+    for p in std::env::args().skip(1) {
+        let part = thinplan_native::load_part(std::path::Path::new(&p)).unwrap();
+        let brep = part.build().unwrap();
+        let t = std::time::Instant::now();
+        let r = thinplan_recognise::recognise(&brep, DVec3::Z, &k, &m);
+        println!("== {p}: {} faces, {:?}", brep.faces.len(), t.elapsed());
+        for f in &r.features {
+            let names: Vec<&str> = f
+                .faces
+                .iter()
+                .map(|&i| brep.faces[i].name.as_str())
+                .collect();
+            println!(
+                "  {} {:?} {:?} t={:?} h={:.2} l={:.2} axis={:?} rule={} {:?}",
+                f.id,
+                f.kind,
+                f.role,
+                f.thickness,
+                f.height,
+                f.length,
+                f.axis,
+                f.provenance.rule,
+                names
+            );
+        }
+        for c in &r.connections {
+            println!(
+                "  {} -> {} {:?} ({})",
+                c.base, c.leaf, c.kind, c.provenance.rule
+            );
+        }
+        for w in &r.warnings {
+            println!("  warning: {w}");
+        }
+    }
+}
