@@ -64,11 +64,10 @@ fn default_plan_runs_on_the_bundled_sample_and_is_deterministic() {
 
 #[test]
 fn inspect_json_follows_the_contract_and_agrees_with_opencascade() {
-    let file = repo().join("../shared/data/aagnet/partC.step");
-    if !file.exists() {
-        eprintln!("note: ../shared/data missing; skipped");
+    let Some(dir) = thinplan_testdata::data_dir("aagnet") else {
         return;
-    }
+    };
+    let file = dir.join("partC.step");
     let (code, v) = run_json(thinplan().args(["inspect", "--json"]).arg(&file));
     assert_eq!(code, 0, "{v}");
     let reference: Value = serde_json::from_str(

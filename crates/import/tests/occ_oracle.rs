@@ -11,20 +11,8 @@ fn repo() -> PathBuf {
 }
 
 fn data_files() -> Vec<PathBuf> {
-    let mut files = Vec::new();
-    for dir in ["mfcad", "aagnet"] {
-        let d = repo().join("../shared/data").join(dir);
-        let Ok(rd) = std::fs::read_dir(&d) else {
-            continue;
-        };
-        for e in rd {
-            let p = e.unwrap().path();
-            if p.extension().is_some_and(|x| x == "step") {
-                files.push(p);
-            }
-        }
-    }
-    files.sort();
+    let mut files = thinplan_testdata::step_files("mfcad");
+    files.extend(thinplan_testdata::step_files("aagnet"));
     files
 }
 
@@ -36,7 +24,6 @@ fn rel_close(a: f64, b: f64, rel: f64) -> bool {
 fn real_files_match_opencascade() {
     let files = data_files();
     if files.is_empty() {
-        eprintln!("note: ../shared/data not present; skipping the OpenCASCADE comparison");
         return;
     }
     let reference: Value = serde_json::from_str(

@@ -6,8 +6,11 @@ use std::path::Path;
 
 use thinplan_step::{p21, read_step_file};
 
-fn check_dir(dir: &str, expect_units: Option<&[&str]>) {
-    let dir = Path::new(dir);
+fn check_dir(name: &str, expect_units: Option<&[&str]>) {
+    let Some(dir) = thinplan_testdata::data_dir(name) else {
+        return;
+    };
+    let dir = dir.as_path();
     let Ok(rd) = std::fs::read_dir(dir) else {
         println!("note: {} is missing; skipped", dir.display());
         return;
@@ -88,17 +91,20 @@ fn check_dir(dir: &str, expect_units: Option<&[&str]>) {
 
 #[test]
 fn mfcad_all_files() {
-    check_dir("/work/shared/data/mfcad", Some(&["mm", "m"]));
+    check_dir("mfcad", Some(&["mm", "m"]));
 }
 
 #[test]
 fn aagnet_all_files() {
-    check_dir("/work/shared/data/aagnet", Some(&["mm", "m"]));
+    check_dir("aagnet", Some(&["mm", "m"]));
 }
 
 #[test]
 fn mfcad_face_names_kept() {
-    let path = Path::new("/work/shared/data/mfcad/0-0-0-0-13-23.step");
+    let Some(dir) = thinplan_testdata::data_dir("mfcad") else {
+        return;
+    };
+    let path = &dir.join("0-0-0-0-13-23.step");
     if !path.exists() {
         println!("note: {} is missing; skipped", path.display());
         return;

@@ -98,13 +98,11 @@ fn compare(reference: &Path, dirs: &[PathBuf]) {
 
 #[test]
 fn real_files_agree_with_occ() {
-    compare(
-        &oracle_dir().join("occ_reference.json"),
-        &[
-            PathBuf::from("/work/shared/data/mfcad"),
-            PathBuf::from("/work/shared/data/aagnet"),
-        ],
-    );
+    let dirs: Vec<PathBuf> = ["mfcad", "aagnet"]
+        .iter()
+        .filter_map(|d| thinplan_testdata::data_dir(d))
+        .collect();
+    compare(&oracle_dir().join("occ_reference.json"), &dirs);
 }
 
 #[test]
