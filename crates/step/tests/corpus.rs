@@ -2,7 +2,6 @@
 
 mod common;
 
-use std::path::Path;
 
 use thinplan_step::{p21, read_step_file};
 
