@@ -1,22 +1,677 @@
 //! Depressions (holes, cut-outs, slots, notches, pockets, steps) and details
-//! (chamfers, fillets).
+//! (chamfers, fillets), thesis §5.4.1 and §6.1.1.
+//!
+//! # Algorithm
+//!
+//! Only the faces walls did not claim are read.
+//!
+//! 1. **Envelope faces.** A planar face with the whole part behind its plane
+//!    lies on the convex hull: a face of the stock envelope (or a chamfer on
+//!    it). Every other face (a planar face with material in front of it, a
+//!    cylinder or cone with material outside) is a *depression face*.
+//! 2. **Depression face sets.** Depression faces are joined across concave
+//!    and tangent edges into connected sets (the classic "concave edge"
+//!    grouping: a subtractive feature's faces meet one another at concave
+//!    edges and the rest of the part at convex ones).
+//! 3. **Frame.** Each set is read in the frame of an axis: the normal of its
+//!    *floor* (a planar face no other face of the set turns against, with
+//!    most sides perpendicular to it, preferring a normal parallel to an
+//!    envelope face), or without a floor the common perpendicular of its
+//!    sides (a through opening).
+//! 4. **Topology and shape.** The sides (faces of the set other than
+//!    floors) form a closed ring around the axis or an open chain. Closed
+//!    with a floor: pocket; closed without: hole (round when its sides are
+//!    one cylinder, else a free-shaped passage). Open with a floor: one side
+//!    is a step (slanted when the side leans away from the floor), two
+//!    facing sides a slot, two sides meeting at a corner a blind step, three
+//!    or more a blind slot; open without a floor: two sides a V slot (or a
+//!    notch at a right angle), more a cut-out. The profile (the floor's
+//!    outline, or the hull of the sides' projection) becomes the feature's
+//!    [`Prism`]; its corner count and the corner angles are recorded.
+//! 5. **Details.** A narrow planar face with convex edges, inclined to the
+//!    neighbours along its two long edges, is a chamfer; a cylindrical blend
+//!    (concave or convex, tangent to its neighbours, radius at most the
+//!    knowledge's limit) that no depression took is a fillet.
+//!
+//! Nothing here depends on `up`: depressions are classified in their own
+//! frame (roles, which depend on the set-up, are for walls).
+//!
+//! Every feature's provenance records the rule (`recognise.pocket`,
+//! `recognise.step.slanted`, …) and the values it used: `sides` (planar
+//! sides), `curved_sides`, `floor` (0/1), `closed` (0/1), `profile_corners`
+//! (corners of the profile), `floor_corners`, `right_corners` (1 when all
+//! side–side corners are right angles), `min_corner_deg`, `slanted`,
+//! `depth`.
 
 use std::collections::BTreeSet;
 
-use glam::DVec3;
-use thinplan_brep::{Brep, EdgeAdjacency, FaceId};
-use thinplan_knowledge::DepressionRecognition;
-use thinplan_plan::StiffnessFeature;
+use glam::{DVec2, DVec3};
+use thinplan_brep::{Brep, Convexity, EdgeAdjacency, FaceId};
+use thinplan_knowledge::{DepressionKind, DepressionRecognition};
+use thinplan_plan::{
+    Prism, PrismFrame, ProfileLoop, ProfileVertex, Provenance, ProvenanceSource, Region,
+    StiffnessFeature, StiffnessFeatureId, StiffnessKind,
+};
+
+mod geom;
+
+use geom::{convex_hull, face_facts, frame_for, polygon_corners, signed_area, FaceFacts, FaceGeom};
 
 /// Finds depressions and details among the faces walls did not claim
 /// (ids are assigned by the caller).
 pub fn find_depressions(
-    _brep: &Brep,
-    _adjacency: &[EdgeAdjacency],
+    brep: &Brep,
+    adjacency: &[EdgeAdjacency],
     _up: DVec3,
-    _k: &DepressionRecognition,
-    _claimed: &BTreeSet<FaceId>,
-    _warnings: &mut Vec<String>,
+    k: &DepressionRecognition,
+    claimed: &BTreeSet<FaceId>,
+    warnings: &mut Vec<String>,
 ) -> Vec<StiffnessFeature> {
-    Vec::new()
+    let facts = face_facts(brep, adjacency, k.distance_tolerance.max(1e-9));
+    let r = Reader {
+        brep,
+        facts: &facts,
+        k,
+        claimed,
+        sin_tol: k.angle_tolerance_deg.to_radians().sin(),
+    };
+    r.run(warnings)
+}
+
+struct Reader<'a> {
+    brep: &'a Brep,
+    facts: &'a [FaceFacts],
+    k: &'a DepressionRecognition,
+    claimed: &'a BTreeSet<FaceId>,
+    /// Sine of the angle tolerance: `|a·b|` below it is perpendicular,
+    /// above `1 −` it parallel.
+    sin_tol: f64,
+}
+
+/// What one depression face set was read as.
+struct Reading {
+    kind: DepressionKind,
+    rule: &'static str,
+    axis: DVec3,
+    faces: Vec<FaceId>,
+    values: Vec<(&'static str, f64)>,
+    shape: Option<Prism>,
+    height: f64,
+    length: f64,
+    diameter: Option<f64>,
+}
+
+impl Reader<'_> {
+    fn run(&self, warnings: &mut Vec<String>) -> Vec<StiffnessFeature> {
+        let n = self.brep.faces.len();
+        let free = |f: FaceId| !self.claimed.contains(&f);
+        let is_dep: Vec<bool> = (0..n)
+            .map(|f| free(f) && self.is_depression_face(f))
+            .collect();
+        // Connected sets over concave and tangent edges.
+        let mut comp = vec![usize::MAX; n];
+        let mut sets: Vec<Vec<FaceId>> = Vec::new();
+        for s in 0..n {
+            if !is_dep[s] || comp[s] != usize::MAX {
+                continue;
+            }
+            let id = sets.len();
+            let mut set = vec![s];
+            comp[s] = id;
+            let mut i = 0;
+            while i < set.len() {
+                let f = set[i];
+                for nb in &self.facts[f].neighbours {
+                    if is_dep[nb.face]
+                        && comp[nb.face] == usize::MAX
+                        && matches!(nb.convexity, Convexity::Concave | Convexity::Smooth)
+                    {
+                        comp[nb.face] = id;
+                        set.push(nb.face);
+                    }
+                }
+                i += 1;
+            }
+            set.sort_unstable();
+            sets.push(set);
+        }
+        let mut readings = Vec::new();
+        let mut used = vec![false; n];
+        for set in &sets {
+            if let Some(r) = self.read_set(set) {
+                for &f in &r.faces {
+                    used[f] = true;
+                }
+                readings.push(r);
+            }
+        }
+        // Details on what is left.
+        for f in 0..n {
+            if used[f] || !free(f) {
+                continue;
+            }
+            if let Some(r) = self.read_chamfer(f).or_else(|| self.read_fillet(f)) {
+                used[f] = true;
+                readings.push(r);
+            }
+        }
+        readings.retain(|r| self.k.recognises(r.kind));
+        if readings.is_empty() && !sets.is_empty() {
+            warnings.push(format!(
+                "depressions: {} depression face set(s) matched no enabled kind",
+                sets.len()
+            ));
+        }
+        readings.into_iter().map(into_feature).collect()
+    }
+
+    /// A face that bounds removed material: not on the envelope.
+    fn is_depression_face(&self, f: FaceId) -> bool {
+        let fx = &self.facts[f];
+        match fx.geom {
+            FaceGeom::Plane { .. } => {
+                !fx.hull
+                    && fx
+                        .neighbours
+                        .iter()
+                        .any(|nb| matches!(nb.convexity, Convexity::Concave | Convexity::Smooth))
+            }
+            FaceGeom::Cylinder { hole, .. } | FaceGeom::Cone { hole, .. } => hole,
+            FaceGeom::Other => false,
+        }
+    }
+
+    fn parallel(&self, a: DVec3, b: DVec3) -> bool {
+        a.dot(b) > 1.0 - self.sin_tol
+    }
+
+    fn perpendicular(&self, a: DVec3, b: DVec3) -> bool {
+        a.dot(b).abs() < self.sin_tol
+    }
+
+    /// Whether the part has an envelope face with its normal along `a` (±).
+    fn principal(&self, a: DVec3) -> bool {
+        self.facts.iter().any(|fx| {
+            fx.hull
+                && fx
+                    .geom
+                    .normal()
+                    .is_some_and(|n| n.dot(a).abs() > 1.0 - self.sin_tol)
+        })
+    }
+
+    /// Adjacent through a concave or tangent edge.
+    fn joined(&self, a: FaceId, b: FaceId) -> bool {
+        self.facts[a].neighbours.iter().any(|nb| {
+            nb.face == b && matches!(nb.convexity, Convexity::Concave | Convexity::Smooth)
+        })
+    }
+
+    /// Picks the floor of a set: `(face, score)`.
+    fn floor_of(&self, set: &[FaceId]) -> Option<FaceId> {
+        let mut best: Option<((usize, bool, i64), FaceId)> = None;
+        for &f in set {
+            let Some(a) = self.facts[f].geom.normal() else {
+                continue;
+            };
+            let mut ok = true;
+            let mut perp = 0usize;
+            let mut joined_side = false;
+            for &g in set {
+                if g == f {
+                    continue;
+                }
+                match self.facts[g].geom {
+                    FaceGeom::Plane { normal, .. } => {
+                        let d = normal.dot(a);
+                        if d < -self.sin_tol {
+                            ok = false;
+                        } else if self.perpendicular(normal, a) {
+                            perp += 1;
+                        }
+                    }
+                    FaceGeom::Cylinder { axis, .. } | FaceGeom::Cone { axis, .. } => {
+                        if axis.dot(a).abs() > 1.0 - self.sin_tol {
+                            perp += 1;
+                        }
+                    }
+                    FaceGeom::Other => {}
+                }
+                if self.joined(f, g) {
+                    joined_side = true;
+                }
+            }
+            if !ok || (!joined_side && set.len() > 1) {
+                continue;
+            }
+            let area = (geom::loop_area(&self.facts[f].outer) * 1e3) as i64;
+            let key = (perp, self.principal(a), area);
+            if best.as_ref().is_none_or(|(b, _)| key > *b) {
+                best = Some((key, f));
+            }
+        }
+        best.map(|(_, f)| f)
+    }
+
+    /// Common perpendicular of the sides of a set without a floor.
+    fn through_axis(&self, set: &[FaceId]) -> Option<DVec3> {
+        let mut dirs: Vec<DVec3> = Vec::new();
+        for &f in set {
+            match self.facts[f].geom {
+                FaceGeom::Cylinder { axis, .. } | FaceGeom::Cone { axis, .. } => return Some(axis),
+                FaceGeom::Plane { normal, .. } => dirs.push(normal),
+                FaceGeom::Other => {}
+            }
+        }
+        let mut best: Option<(usize, DVec3)> = None;
+        for i in 0..dirs.len() {
+            for j in i + 1..dirs.len() {
+                let c = dirs[i].cross(dirs[j]);
+                if c.length() < 0.05 {
+                    continue;
+                }
+                let a = c.normalize();
+                let count = dirs.iter().filter(|d| self.perpendicular(**d, a)).count();
+                if best.is_none_or(|(b, _)| count > b) {
+                    best = Some((count, a));
+                }
+            }
+        }
+        best.map(|(_, a)| canonical(a))
+    }
+
+    fn read_set(&self, set: &[FaceId]) -> Option<Reading> {
+        // A lone blend between claimed faces is a fillet, not a depression.
+        if set.len() == 1 {
+            if let FaceGeom::Cylinder { .. } = self.facts[set[0]].geom {
+                if !self.full_turn(set) {
+                    if let Some(r) = self.read_fillet(set[0]) {
+                        return Some(r);
+                    }
+                }
+            }
+        }
+        let floor = self.floor_of(set);
+        let axis = match floor {
+            Some(f) => self.facts[f].geom.normal()?,
+            None => self.through_axis(set)?,
+        };
+        let floors: Vec<FaceId> = set
+            .iter()
+            .copied()
+            .filter(|&f| {
+                floor.is_some()
+                    && self.facts[f]
+                        .geom
+                        .normal()
+                        .is_some_and(|n| self.parallel(n, axis))
+            })
+            .collect();
+        let sides: Vec<FaceId> = set
+            .iter()
+            .copied()
+            .filter(|f| !floors.contains(f))
+            .collect();
+        let planar_sides: Vec<FaceId> = sides
+            .iter()
+            .copied()
+            .filter(|&f| matches!(self.facts[f].geom, FaceGeom::Plane { .. }))
+            .collect();
+        let curved = sides.len() - planar_sides.len();
+        // Ring or chain: degrees in the side graph.
+        let degree = |f: FaceId| sides.iter().filter(|&&g| g != f && self.joined(f, g)).count();
+        let closed = if sides.is_empty() {
+            false
+        } else if curved == sides.len() && planar_sides.is_empty() {
+            self.full_turn(&sides)
+        } else {
+            sides.len() >= 3 && sides.iter().all(|&f| degree(f) >= 2)
+                || (sides.len() == 2 && self.full_turn(&sides))
+        };
+        // Corner angles between planar sides meeting at concave edges.
+        let mut min_corner = 180.0f64;
+        let mut right = true;
+        let mut corners = 0;
+        for (i, &a) in planar_sides.iter().enumerate() {
+            for &b in &planar_sides[i + 1..] {
+                if !self.joined(a, b) {
+                    continue;
+                }
+                let (na, nb) = (
+                    self.facts[a].geom.normal().unwrap_or(DVec3::Z),
+                    self.facts[b].geom.normal().unwrap_or(DVec3::Z),
+                );
+                // Interior angle of the removed region's profile at the corner.
+                let pa = (na - axis * na.dot(axis)).normalize_or_zero();
+                let pb = (nb - axis * nb.dot(axis)).normalize_or_zero();
+                let angle = 180.0 - pa.dot(pb).clamp(-1.0, 1.0).acos().to_degrees();
+                min_corner = min_corner.min(angle);
+                corners += 1;
+                if (angle - 90.0).abs() > self.k.right_angle_tolerance_deg {
+                    right = false;
+                }
+            }
+        }
+        if corners == 0 {
+            right = false;
+        }
+        let slanted = planar_sides.iter().any(|&f| {
+            self.facts[f]
+                .geom
+                .normal()
+                .is_some_and(|n| n.dot(axis) > self.sin_tol)
+        });
+        // Profile and depth in the axis frame.
+        let pts: Vec<DVec3> = set
+            .iter()
+            .flat_map(|&f| self.facts[f].points.iter().copied())
+            .collect();
+        let origin = floor
+            .map(|f| self.facts[f].points[0])
+            .unwrap_or_else(|| pts.iter().copied().sum::<DVec3>() / pts.len().max(1) as f64);
+        let frame = frame_for(axis, origin);
+        let local: Vec<DVec3> = pts.iter().map(|p| frame.to_local(*p)).collect();
+        let z_min = local.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+        let z_max = local.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max);
+        let tol = self.k.distance_tolerance.max(1e-6) * 10.0;
+        let (profile, floor_corners) = match floor {
+            Some(f) => {
+                let outline: Vec<DVec2> = self.facts[f]
+                    .outer
+                    .iter()
+                    .map(|p| frame.to_local(*p).truncate())
+                    .collect();
+                let c = polygon_corners(&outline, tol);
+                let n = c.len();
+                (c, n)
+            }
+            None => (
+                polygon_corners(&convex_hull(local.iter().map(|p| p.truncate()).collect()), tol),
+                0,
+            ),
+        };
+        let mut profile = profile;
+        if signed_area(&profile) < 0.0 {
+            profile.reverse();
+        }
+        let profile_corners = profile.len();
+        let has_floor = floor.is_some();
+        let n_sides = planar_sides.len();
+        let diameter = match (closed, &sides[..]) {
+            (true, s) if curved == s.len() => match self.facts[s[0]].geom {
+                FaceGeom::Cylinder { radius, .. } => Some(2.0 * radius),
+                _ => None,
+            },
+            _ => None,
+        };
+        use DepressionKind::*;
+        let (kind, rule) = if closed {
+            match (has_floor, diameter.is_some()) {
+                (false, true) => (Hole, "recognise.hole.round"),
+                (false, false) => (Hole, "recognise.hole.passage"),
+                (true, true) => (Hole, "recognise.hole.blind"),
+                (true, false) => (Pocket, "recognise.pocket"),
+            }
+        } else if has_floor {
+            match n_sides + curved {
+                0 => return None,
+                1 if slanted => (Step, "recognise.step.slanted"),
+                1 => (Step, "recognise.step.through"),
+                2 => {
+                    let adjacent = sides.len() == 2 && self.joined(sides[0], sides[1]);
+                    if !adjacent {
+                        (Slot, "recognise.slot.through")
+                    } else if right {
+                        (Step, "recognise.step.blind")
+                    } else {
+                        (Step, "recognise.step.two_sided")
+                    }
+                }
+                _ => (Slot, "recognise.slot.blind"),
+            }
+        } else {
+            match n_sides + curved {
+                0 | 1 => (Notch, "recognise.notch"),
+                2 if right => (Notch, "recognise.notch"),
+                2 => (Slot, "recognise.slot.v"),
+                _ => (Cutout, "recognise.cutout"),
+            }
+        };
+        let shape = (profile.len() >= 3).then(|| Prism {
+            frame: PrismFrame {
+                origin: frame.origin,
+                x: frame.x,
+                z: frame.z,
+            },
+            region: Region {
+                outer: ProfileLoop {
+                    vertices: profile
+                        .iter()
+                        .map(|p| ProfileVertex {
+                            x: p.x,
+                            y: p.y,
+                            bulge: 0.0,
+                        })
+                        .collect(),
+                },
+                holes: Vec::new(),
+            },
+            z_min,
+            z_max,
+        });
+        let (lo, hi) = profile.iter().fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let length = (hi - lo).max_element().max(0.0);
+        let mut values = vec![
+            ("sides", n_sides as f64),
+            ("curved_sides", curved as f64),
+            ("floor", has_floor as u8 as f64),
+            ("closed", closed as u8 as f64),
+            ("profile_corners", profile_corners as f64),
+            ("floor_corners", floor_corners as f64),
+            ("right_corners", right as u8 as f64),
+            ("min_corner_deg", if corners > 0 { min_corner } else { 0.0 }),
+            ("slanted", slanted as u8 as f64),
+            ("depth", z_max - z_min),
+        ];
+        if let Some(d) = diameter {
+            values.push(("diameter", d));
+        }
+        Some(Reading {
+            kind,
+            rule,
+            axis,
+            faces: set.to_vec(),
+            values,
+            shape,
+            height: z_max - z_min,
+            length,
+            diameter,
+        })
+    }
+
+    /// Whether curved faces together turn all the way round their axis
+    /// (a full hole wall).
+    fn full_turn(&self, faces: &[FaceId]) -> bool {
+        let mut sweep = 0.0;
+        for &f in faces {
+            let FaceGeom::Cylinder { axis, origin, .. } = self.facts[f].geom else {
+                return false;
+            };
+            let frame = frame_for(axis, origin);
+            let mut angles: Vec<f64> = self.facts[f]
+                .points
+                .iter()
+                .map(|p| {
+                    let l = frame.to_local(*p);
+                    l.y.atan2(l.x)
+                })
+                .collect();
+            angles.sort_by(f64::total_cmp);
+            // The largest angular gap not covered by the face.
+            let mut gap: f64 = 0.0;
+            for w in angles.windows(2) {
+                gap = gap.max(w[1] - w[0]);
+            }
+            if let (Some(a), Some(b)) = (angles.first(), angles.last()) {
+                gap = gap.max(a + std::f64::consts::TAU - b);
+            }
+            sweep += std::f64::consts::TAU - gap;
+        }
+        sweep > std::f64::consts::TAU - 0.2
+    }
+
+    /// A narrow planar face with convex edges, inclined to the faces along
+    /// its two long edges.
+    fn read_chamfer(&self, f: FaceId) -> Option<Reading> {
+        let fx = &self.facts[f];
+        let n = fx.geom.normal()?;
+        if fx.neighbours.is_empty()
+            || fx
+                .neighbours
+                .iter()
+                .any(|nb| !matches!(nb.convexity, Convexity::Convex))
+        {
+            return None;
+        }
+        // The two longest straight edges.
+        let mut edges: Vec<(f64, usize)> = fx
+            .neighbours
+            .iter()
+            .enumerate()
+            .map(|(i, nb)| {
+                let e = &self.brep.edges[nb.edge];
+                let a = self.brep.vertices[e.start].point;
+                let b = self.brep.vertices[e.end].point;
+                (a.distance(b), i)
+            })
+            .collect();
+        edges.sort_by(|a, b| b.0.total_cmp(&a.0));
+        if edges.len() < 2 {
+            return None;
+        }
+        let lo = self.k.min_chamfer_incline_deg.to_radians();
+        let inclined = |i: usize| {
+            let g = fx.neighbours[i].face;
+            self.facts[g].geom.normal().is_some_and(|m| {
+                let ang = n.dot(m).clamp(-1.0, 1.0).acos();
+                ang > lo && ang < std::f64::consts::FRAC_PI_2 - lo
+            })
+        };
+        // The long edges: the longest, and the longest one parallel to it.
+        let e0 = &self.brep.edges[fx.neighbours[edges[0].1].edge];
+        let d0 = (self.brep.vertices[e0.end].point - self.brep.vertices[e0.start].point)
+            .normalize_or_zero();
+        let other = edges[1..].iter().find(|(_, i)| {
+            let e = &self.brep.edges[fx.neighbours[*i].edge];
+            let d = (self.brep.vertices[e.end].point - self.brep.vertices[e.start].point)
+                .normalize_or_zero();
+            d.dot(d0).abs() > 1.0 - self.sin_tol
+        })?;
+        if !inclined(edges[0].1) || !inclined(other.1) {
+            return None;
+        }
+        let p0 = self.brep.vertices[e0.start].point;
+        let width = fx
+            .points
+            .iter()
+            .map(|p| {
+                let v = *p - p0;
+                (v - d0 * v.dot(d0)).length()
+            })
+            .fold(0.0, f64::max);
+        if width > self.k.max_chamfer_width {
+            return None;
+        }
+        Some(Reading {
+            kind: DepressionKind::Chamfer,
+            rule: "recognise.chamfer",
+            axis: n,
+            faces: vec![f],
+            values: vec![("width", width), ("length", edges[0].0)],
+            shape: None,
+            height: width,
+            length: edges[0].0,
+            diameter: None,
+        })
+    }
+
+    /// A cylindrical blend of small radius, tangent to a neighbour.
+    fn read_fillet(&self, f: FaceId) -> Option<Reading> {
+        let fx = &self.facts[f];
+        let FaceGeom::Cylinder {
+            axis, radius, hole, ..
+        } = fx.geom
+        else {
+            return None;
+        };
+        if radius > self.k.max_fillet_radius
+            || !fx
+                .neighbours
+                .iter()
+                .any(|nb| nb.convexity == Convexity::Smooth && nb.face != f)
+            || self.full_turn(&[f])
+        {
+            return None;
+        }
+        Some(Reading {
+            kind: DepressionKind::Fillet,
+            rule: if hole {
+                "recognise.fillet.concave"
+            } else {
+                "recognise.fillet.convex"
+            },
+            axis,
+            faces: vec![f],
+            values: vec![("radius", radius), ("concave", hole as u8 as f64)],
+            shape: None,
+            height: 0.0,
+            length: 0.0,
+            diameter: None,
+        })
+    }
+}
+
+/// A direction with its first significant component positive (through
+/// openings have no preferred sense).
+fn canonical(a: DVec3) -> DVec3 {
+    for c in [a.x, a.y, a.z] {
+        if c.abs() > 1e-9 {
+            return if c < 0.0 { -a } else { a };
+        }
+    }
+    a
+}
+
+fn into_feature(r: Reading) -> StiffnessFeature {
+    let kind = match r.kind {
+        DepressionKind::Hole => StiffnessKind::Hole,
+        DepressionKind::Cutout => StiffnessKind::Cutout,
+        DepressionKind::Slot => StiffnessKind::Slot,
+        DepressionKind::Notch => StiffnessKind::Notch,
+        DepressionKind::Pocket => StiffnessKind::Pocket,
+        DepressionKind::Step => StiffnessKind::Step,
+        DepressionKind::Chamfer => StiffnessKind::Chamfer,
+        DepressionKind::Fillet => StiffnessKind::Fillet,
+    };
+    let mut provenance = Provenance::new(ProvenanceSource::Recogniser, r.rule);
+    for (name, v) in r.values {
+        provenance = provenance.with_value(name, v);
+    }
+    StiffnessFeature {
+        id: StiffnessFeatureId(0),
+        kind,
+        role: None,
+        faces: r.faces,
+        axis: r.axis,
+        thickness: None,
+        height: r.height,
+        length: r.length,
+        diameter: r.diameter,
+        shape: r.shape,
+        access: Vec::new(),
+        provenance,
+    }
 }

@@ -16,6 +16,7 @@ use thinplan_plan::{Connection, StiffnessFeature, StiffnessFeatureId};
 pub mod accessibility;
 pub mod connect;
 pub mod depressions;
+pub mod mfcad;
 pub mod report;
 pub mod walls;
 
