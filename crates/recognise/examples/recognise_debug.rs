@@ -7,7 +7,16 @@ fn main() {
         let part = thinplan_native::load_part(std::path::Path::new(&p)).unwrap();
         let brep = part.build().unwrap();
         let t = std::time::Instant::now();
-        let r = thinplan_recognise::recognise(&brep, DVec3::Z, &k, &m);
+        let r = thinplan_recognise::recognise(
+            &brep,
+            if std::env::var("DOWN").is_ok() {
+                -DVec3::Z
+            } else {
+                DVec3::Z
+            },
+            &k,
+            &m,
+        );
         println!("== {p}: {} faces, {:?}", brep.faces.len(), t.elapsed());
         for f in &r.features {
             let names: Vec<&str> = f
@@ -33,6 +42,24 @@ fn main() {
                 "  {} -> {} {:?} ({})",
                 c.base, c.leaf, c.kind, c.provenance.rule
             );
+        }
+        if let Ok(dir) = std::env::var("SVG_DIR") {
+            let name = std::path::Path::new(&p)
+                .file_stem()
+                .unwrap()
+                .to_string_lossy()
+                .to_string();
+            std::fs::write(
+                format!("{dir}/{name}.svg"),
+                thinplan_recognise::report::to_svg(&r, &brep),
+            )
+            .unwrap();
+            std::fs::write(
+                format!("{dir}/{name}.json"),
+                serde_json::to_string_pretty(&thinplan_recognise::report::to_json(&r, &brep))
+                    .unwrap(),
+            )
+            .unwrap();
         }
         for w in &r.warnings {
             println!("  warning: {w}");
