@@ -138,7 +138,7 @@ impl Reader<'_> {
         let mut readings = Vec::new();
         let mut used = vec![false; n];
         for set in &sets {
-            if let Some(r) = self.read_set(set) {
+            for r in self.read_set(set) {
                 for &f in &r.faces {
                     used[f] = true;
                 }
@@ -280,7 +280,55 @@ impl Reader<'_> {
         best.map(|(_, a)| canonical(a))
     }
 
-    fn read_set(&self, set: &[FaceId]) -> Option<Reading> {
+    /// Splits faces into sets connected through concave or tangent edges.
+    fn connected_parts(&self, faces: &[FaceId]) -> Vec<Vec<FaceId>> {
+        let mut left: Vec<FaceId> = faces.to_vec();
+        let mut out = Vec::new();
+        while let Some(s) = left.pop() {
+            let mut part = vec![s];
+            let mut i = 0;
+            while i < part.len() {
+                let f = part[i];
+                let (join, keep): (Vec<FaceId>, Vec<FaceId>) =
+                    left.iter().partition(|&&g| self.joined(f, g));
+                part.extend(join);
+                left = keep;
+                i += 1;
+            }
+            part.sort_unstable();
+            out.push(part);
+        }
+        out.sort();
+        out
+    }
+
+    fn read_set(&self, set: &[FaceId]) -> Vec<Reading> {
+        if self.floor_of(set).is_none() {
+            if let Some(axis) = self.through_axis(set) {
+                // Through openings along different axes that meet (crossing
+                // passages): read the faces along this axis alone, then the rest.
+                let (along, rest): (Vec<FaceId>, Vec<FaceId>) =
+                    set.iter().partition(|&&f| match self.facts[f].geom {
+                        FaceGeom::Plane { normal, .. } => self.perpendicular(normal, axis),
+                        _ => true,
+                    });
+                if !rest.is_empty() && along.len() >= 2 {
+                    let mut out = Vec::new();
+                    for part in self
+                        .connected_parts(&along)
+                        .into_iter()
+                        .chain(self.connected_parts(&rest))
+                    {
+                        out.extend(self.read_set(&part));
+                    }
+                    return out;
+                }
+            }
+        }
+        self.read_one(set).into_iter().collect()
+    }
+
+    fn read_one(&self, set: &[FaceId]) -> Option<Reading> {
         // A lone blend between claimed faces is a fillet, not a depression.
         if set.len() == 1 {
             if let FaceGeom::Cylinder { .. } = self.facts[set[0]].geom {
@@ -319,7 +367,12 @@ impl Reader<'_> {
             .collect();
         let curved = sides.len() - planar_sides.len();
         // Ring or chain: degrees in the side graph.
-        let degree = |f: FaceId| sides.iter().filter(|&&g| g != f && self.joined(f, g)).count();
+        let degree = |f: FaceId| {
+            sides
+                .iter()
+                .filter(|&&g| g != f && self.joined(f, g))
+                .count()
+        };
         let closed = if sides.is_empty() {
             false
         } else if curved == sides.len() && planar_sides.is_empty() {
@@ -355,12 +408,23 @@ impl Reader<'_> {
         if corners == 0 {
             right = false;
         }
-        let slanted = planar_sides.iter().any(|&f| {
+        // A side leaning away from the floor, or a one-sided step whose faces
+        // are inclined to the envelope while its floor is not a triangle
+        // cut off a corner.
+        let leaning = planar_sides.iter().any(|&f| {
             self.facts[f]
                 .geom
                 .normal()
                 .is_some_and(|n| n.dot(axis) > self.sin_tol)
         });
+        let tilted = floor.is_some()
+            && planar_sides.len() == 1
+            && set.iter().any(|&f| {
+                self.facts[f]
+                    .geom
+                    .normal()
+                    .is_some_and(|n| !self.principal(n))
+            });
         // Profile and depth in the axis frame.
         let pts: Vec<DVec3> = set
             .iter()
@@ -386,7 +450,10 @@ impl Reader<'_> {
                 (c, n)
             }
             None => (
-                polygon_corners(&convex_hull(local.iter().map(|p| p.truncate()).collect()), tol),
+                polygon_corners(
+                    &convex_hull(local.iter().map(|p| p.truncate()).collect()),
+                    tol,
+                ),
                 0,
             ),
         };
@@ -395,8 +462,22 @@ impl Reader<'_> {
             profile.reverse();
         }
         let profile_corners = profile.len();
+        let slanted = leaning || (tilted && floor_corners != 3);
         let has_floor = floor.is_some();
-        let n_sides = planar_sides.len();
+        // Coplanar pieces (a side cut in two by a crossing feature) are one side.
+        let mut planes: Vec<(DVec3, f64)> = Vec::new();
+        for &f in &planar_sides {
+            if let FaceGeom::Plane { normal, origin } = self.facts[f].geom {
+                let d = normal.dot(origin);
+                if !planes
+                    .iter()
+                    .any(|(n, e)| self.parallel(*n, normal) && (d - e).abs() <= tol)
+                {
+                    planes.push((normal, d));
+                }
+            }
+        }
+        let n_sides = planes.len();
         let diameter = match (closed, &sides[..]) {
             (true, s) if curved == s.len() => match self.facts[s[0]].geom {
                 FaceGeom::Cylinder { radius, .. } => Some(2.0 * radius),
@@ -582,7 +663,16 @@ impl Reader<'_> {
                 (v - d0 * v.dot(d0)).length()
             })
             .fold(0.0, f64::max);
-        if width > self.k.max_chamfer_width {
+        // On the envelope (an edge of the stock cut off) the width may also
+        // be relative to the length.
+        let limit = if fx.hull {
+            self.k
+                .max_chamfer_width
+                .max(self.k.max_chamfer_width_ratio * edges[0].0)
+        } else {
+            self.k.max_chamfer_width
+        };
+        if width > limit {
             return None;
         }
         Some(Reading {

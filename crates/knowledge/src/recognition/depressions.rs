@@ -26,6 +26,10 @@ pub struct DepressionRecognition {
     /// A chamfer is a planar face at most this wide (mm) between two faces
     /// it is inclined to.
     pub max_chamfer_width: f64,
+    /// A chamfer on the envelope (cutting off an edge of the stock) may also
+    /// be up to this fraction of its length wide.
+    #[serde(default = "default_max_chamfer_width_ratio")]
+    pub max_chamfer_width_ratio: f64,
     /// A fillet is a concave or convex cylindrical blend of at most this radius, mm.
     pub max_fillet_radius: f64,
     /// A chamfer is inclined to its neighbours by at least this angle and at
@@ -42,6 +46,10 @@ pub struct DepressionRecognition {
     /// stay plain part faces).
     #[serde(default = "default_priority")]
     pub priority: Vec<DepressionKind>,
+}
+
+fn default_max_chamfer_width_ratio() -> f64 {
+    0.75
 }
 
 fn default_min_chamfer_incline_deg() -> f64 {
