@@ -5,6 +5,7 @@
 //!   in millimetres from the B-rep solids (and surface models) of AP203/AP214/
 //!   AP242 files, honouring the declared length and plane-angle units and
 //!   expanding assemblies into one placed solid per instance.
+//! * [`write_step`]: the way back, a STEP AP214 file from a B-rep.
 //!
 //! The reader never panics on any input; hostile input ends in a
 //! [`StepError`] bounded by [`Limits`].
@@ -14,6 +15,9 @@ use std::path::{Path, PathBuf};
 
 mod build;
 pub mod p21;
+pub mod write;
+
+pub use write::write_step;
 
 /// What a file gave: the B-rep in millimetres and facts about the file.
 #[derive(Debug, Clone)]
