@@ -16,11 +16,13 @@ use std::path::{Path, PathBuf};
 pub mod load;
 pub mod recognition;
 pub mod resources;
+pub mod sequencing;
 pub mod sizing;
 
 pub use load::{load_ron, parse_ron, KnowledgeError};
 pub use recognition::*;
 pub use resources::*;
+pub use sequencing::*;
 pub use sizing::*;
 
 /// All knowledge a plan uses, by id (ordered maps: deterministic).
@@ -38,13 +40,16 @@ pub struct Knowledge {
     /// Thresholds for recognising depressions and details
     /// (`recognition_depressions.ron`).
     pub depression_recognition: DepressionRecognition,
+    /// Stiffness-feature sequencing rules (`sequencing.ron`).
+    pub sequencing: SequencingKnowledge,
 }
 
 /// Files at the knowledge root; each is required.
-pub const ROOT_FILES: [&str; 3] = [
+pub const ROOT_FILES: [&str; 4] = [
     SIZING_FILE,
     "recognition_walls.ron",
     "recognition_depressions.ron",
+    SEQUENCING_FILE,
 ];
 
 /// The embedded copy of the repository's `knowledge/` directory:
@@ -70,6 +75,10 @@ const BUILTIN: &[(&str, &str)] = &[
     (
         "recognition_depressions.ron",
         include_str!("../../../knowledge/recognition_depressions.ron"),
+    ),
+    (
+        "sequencing.ron",
+        include_str!("../../../knowledge/sequencing.ron"),
     ),
 ];
 
@@ -181,8 +190,10 @@ impl Knowledge {
         let walls = parse_root::<WallRecognition>(&root, ROOT_FILES[1], origin, &mut errors);
         let depressions =
             parse_root::<DepressionRecognition>(&root, ROOT_FILES[2], origin, &mut errors);
-        let (Some(sizing), Some(wall_recognition), Some(depression_recognition)) =
-            (sizing, walls, depressions)
+        let sequencing =
+            parse_root::<SequencingKnowledge>(&root, SEQUENCING_FILE, origin, &mut errors);
+        let (Some(sizing), Some(wall_recognition), Some(depression_recognition), Some(sequencing)) =
+            (sizing, walls, depressions, sequencing)
         else {
             return Err(errors);
         };
@@ -195,6 +206,7 @@ impl Knowledge {
                 sizing,
                 wall_recognition,
                 depression_recognition,
+                sequencing,
             }),
             errors,
         };
@@ -382,6 +394,9 @@ fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
     }
     for problem in k.sizing.problems() {
         errors.push(invalid("sizing knowledge (sizing.ron)", problem));
+    }
+    for problem in k.sequencing.problems() {
+        errors.push(invalid("sequencing knowledge (sequencing.ron)", problem));
     }
     for m in k.materials.values() {
         let what = format!("material `{}`", m.id);
