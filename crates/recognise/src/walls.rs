@@ -261,7 +261,7 @@ pub fn find_walls(
 
     let mut keys: Vec<Key> = Vec::new();
     let mut pairs: Vec<Pair> = Vec::new();
-    let mut tris_cache: BTreeMap<(usize, FaceId), Tris> = BTreeMap::new();
+    let mut tris_cache: BTreeMap<FaceId, Tris> = BTreeMap::new();
 
     // ---- 1. planar pairs -------------------------------------------------
     let mut buckets: BTreeMap<(i64, i64, i64), (DVec3, Vec<PlaneFace>)> = BTreeMap::new();
@@ -286,29 +286,55 @@ pub fn find_walls(
     }
     // Per plane-pair key lookup.
     let mut key_of: BTreeMap<(usize, i64, i64), usize> = BTreeMap::new();
+    let coarse = TessTolerance {
+        chord: 0.5,
+        angle: 0.5,
+    };
     for (bi, (_, (c, faces))) in buckets.iter_mut().enumerate() {
         let c = *c;
-        faces.sort_by(|x, y| x.s.total_cmp(&y.s).then(x.face.cmp(&y.face)));
-        let frame = Frame::from_axis_ref(DVec3::ZERO, c, None);
-        let minus: Vec<&PlaneFace> = faces.iter().filter(|p| !p.plus).collect();
-        let all: &Vec<PlaneFace> = faces;
-        if minus.is_empty() {
+        if !faces.iter().any(|p| p.plus) || faces.iter().all(|p| p.plus) {
             continue;
         }
-        for a in all.iter().filter(|p| p.plus) {
-            // b with s in [a.s - t_search - tol, a.s - tol)
-            let lo = a.s - t_search - tol;
-            let start = minus.partition_point(|p| p.s < lo);
-            for b in minus[start..].iter() {
-                if b.s > a.s - tol {
-                    break;
+        faces.sort_by(|x, y| x.s.total_cmp(&y.s).then(x.face.cmp(&y.face)));
+        let frame = Frame::from_axis_ref(DVec3::ZERO, c, None);
+        let to2 = |p: DVec3| DVec2::new(frame.x.dot(p), frame.y.dot(p));
+        // 2D boxes from the loops (coarse polylines), no tessellation yet.
+        let boxes: Vec<(DVec2, DVec2)> = faces
+            .iter()
+            .map(|pf| {
+                let mut lo = DVec2::splat(f64::INFINITY);
+                let mut hi = DVec2::splat(f64::NEG_INFINITY);
+                for &l in &brep.faces[pf.face].loops {
+                    for p in brep.loop_polyline(l, &coarse) {
+                        let q = to2(p);
+                        lo = lo.min(q);
+                        hi = hi.max(q);
+                    }
                 }
-                let ta = tris_of(brep, a.face, &frame, &tess_tol, bi, &mut tris_cache);
-                let tb = tris_of(brep, b.face, &frame, &tess_tol, bi, &mut tris_cache);
-                if !ta.overlaps_box(&tb, -tol) {
+                // Arcs between polyline points bulge by at most the chord.
+                (
+                    lo - DVec2::splat(coarse.chord),
+                    hi + DVec2::splat(coarse.chord),
+                )
+            })
+            .collect();
+        let slices = Slices::new(faces, &boxes, tol);
+        for (ai, a) in faces.iter().enumerate().filter(|(_, p)| p.plus) {
+            let (amin, amax) = boxes[ai];
+            // b behind a: s in [a.s - t_search - tol, a.s - tol).
+            let mut cands: Vec<usize> = Vec::new();
+            slices.query(a.s - t_search - tol, a.s - tol, amin, amax, &mut cands);
+            cands.retain(|&j| !faces[j].plus);
+            cands.sort_unstable();
+            for bj in cands {
+                let b = &faces[bj];
+                tris_of(brep, a.face, &frame, &tess_tol, &mut tris_cache);
+                tris_of(brep, b.face, &frame, &tess_tol, &mut tris_cache);
+                let (ta, tb) = (&tris_cache[&a.face], &tris_cache[&b.face]);
+                if !ta.overlaps_box(tb, -tol) {
                     continue;
                 }
-                let pieces = clip_all(&ta, &tb);
+                let pieces = clip_all(ta, tb);
                 let area: f64 = pieces.iter().map(|p| poly_area(p).abs()).sum();
                 if area <= (tol * tol).max(1e-6) {
                     continue;
@@ -320,14 +346,17 @@ pub fn find_walls(
                     .max_by(|x, y| poly_area(x).abs().total_cmp(&poly_area(y).abs()))
                     .map(|p| poly_centroid(p))
                     .unwrap_or_default();
-                let i0 = all.partition_point(|p| p.s <= b.s + tol);
+                let mut between: Vec<usize> = Vec::new();
+                slices.query(b.s + tol, a.s - tol, probe, probe, &mut between);
+                between.sort_unstable();
                 let mut blocked = false;
-                for g in all[i0..].iter() {
-                    if g.s >= a.s - tol {
-                        break;
+                for gj in between {
+                    let g = faces[gj].face;
+                    if g == a.face || g == b.face {
+                        continue;
                     }
-                    let tg = tris_of(brep, g.face, &frame, &tess_tol, bi, &mut tris_cache);
-                    if tg.contains(probe) {
+                    tris_of(brep, g, &frame, &tess_tol, &mut tris_cache);
+                    if tris_cache[&g].contains(probe) {
                         blocked = true;
                         break;
                     }
@@ -532,22 +561,71 @@ fn quant(s: f64, tol: f64) -> i64 {
     (s / (10.0 * tol)).round() as i64
 }
 
-/// The tessellation of a face in the 2D frame (x, y) of `frame`, cached.
+/// Tessellates a face into the 2D frame (x, y) of `frame` once (a planar
+/// face belongs to one direction bucket, so the face index is the key).
 fn tris_of(
     brep: &Brep,
     face: FaceId,
     frame: &Frame,
     tol: &TessTolerance,
-    bucket: usize,
-    cache: &mut BTreeMap<(usize, FaceId), Tris>,
-) -> Tris {
-    cache
-        .entry((bucket, face))
-        .or_insert_with(|| {
-            let to2 = |p: DVec3| DVec2::new(frame.x.dot(p), frame.y.dot(p));
-            make_tris(brep, face, tol, to2)
-        })
-        .clone()
+    cache: &mut BTreeMap<FaceId, Tris>,
+) {
+    cache.entry(face).or_insert_with(|| {
+        let to2 = |p: DVec3| DVec2::new(frame.x.dot(p), frame.y.dot(p));
+        make_tris(brep, face, tol, to2)
+    });
+}
+
+/// Faces of one direction bucket grouped by plane offset (slices), each
+/// slice sorted by the 2D box's low x with the widest box remembered, so
+/// that a box query touches only nearby faces.
+struct Slices {
+    /// (offset, entries (min.x, face index in bucket), max box width).
+    slices: Vec<(f64, Vec<(f64, usize)>, f64)>,
+    boxes: Vec<(DVec2, DVec2)>,
+}
+
+impl Slices {
+    fn new(faces: &[PlaneFace], boxes: &[(DVec2, DVec2)], tol: f64) -> Slices {
+        let mut slices: Vec<(f64, Vec<(f64, usize)>, f64)> = Vec::new();
+        for (i, f) in faces.iter().enumerate() {
+            let w = boxes[i].1.x - boxes[i].0.x;
+            match slices.last_mut() {
+                Some(sl) if (f.s - sl.0).abs() <= tol => {
+                    sl.1.push((boxes[i].0.x, i));
+                    sl.2 = sl.2.max(w);
+                }
+                _ => slices.push((f.s, vec![(boxes[i].0.x, i)], w)),
+            }
+        }
+        for sl in &mut slices {
+            sl.1.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        }
+        Slices {
+            slices,
+            boxes: boxes.to_vec(),
+        }
+    }
+
+    /// Faces with offset in `[s0, s1]` whose box meets `[lo, hi]`.
+    fn query(&self, s0: f64, s1: f64, lo: DVec2, hi: DVec2, out: &mut Vec<usize>) {
+        let start = self.slices.partition_point(|sl| sl.0 < s0);
+        for sl in &self.slices[start..] {
+            if sl.0 > s1 {
+                break;
+            }
+            let from = sl.1.partition_point(|e| e.0 < lo.x - sl.2);
+            for &(mx, i) in &sl.1[from..] {
+                if mx > hi.x {
+                    break;
+                }
+                let (bl, bh) = self.boxes[i];
+                if bl.x <= hi.x && bh.x >= lo.x && bl.y <= hi.y && bh.y >= lo.y {
+                    out.push(i);
+                }
+            }
+        }
+    }
 }
 
 fn make_tris(brep: &Brep, face: FaceId, tol: &TessTolerance, to2: impl Fn(DVec3) -> DVec2) -> Tris {
