@@ -74,6 +74,7 @@ pub fn find_depressions(
         k,
         claimed,
         sin_tol: k.angle_tolerance_deg.to_radians().sin(),
+        cos_tol: k.angle_tolerance_deg.to_radians().cos(),
     };
     r.run(warnings)
 }
@@ -86,6 +87,8 @@ struct Reader<'a> {
     /// Sine of the angle tolerance: `|a·b|` below it is perpendicular,
     /// above `1 −` it parallel.
     sin_tol: f64,
+    /// Cosine of the angle tolerance: `a·b` above it is parallel.
+    cos_tol: f64,
 }
 
 /// What one depression face set was read as.
@@ -146,12 +149,12 @@ impl Reader<'_> {
             }
         }
         // Details on what is left.
-        for f in 0..n {
-            if used[f] || !free(f) {
+        for (f, u) in used.iter_mut().enumerate() {
+            if *u || !free(f) {
                 continue;
             }
             if let Some(r) = self.read_chamfer(f).or_else(|| self.read_fillet(f)) {
-                used[f] = true;
+                *u = true;
                 readings.push(r);
             }
         }
@@ -182,7 +185,7 @@ impl Reader<'_> {
     }
 
     fn parallel(&self, a: DVec3, b: DVec3) -> bool {
-        a.dot(b) > 1.0 - self.sin_tol
+        a.dot(b) > self.cos_tol
     }
 
     fn perpendicular(&self, a: DVec3, b: DVec3) -> bool {
@@ -196,7 +199,7 @@ impl Reader<'_> {
                 && fx
                     .geom
                     .normal()
-                    .is_some_and(|n| n.dot(a).abs() > 1.0 - self.sin_tol)
+                    .is_some_and(|n| n.dot(a).abs() > self.cos_tol)
         })
     }
 
@@ -231,7 +234,7 @@ impl Reader<'_> {
                         }
                     }
                     FaceGeom::Cylinder { axis, .. } | FaceGeom::Cone { axis, .. } => {
-                        if axis.dot(a).abs() > 1.0 - self.sin_tol {
+                        if axis.dot(a).abs() > self.cos_tol {
                             perp += 1;
                         }
                     }
@@ -241,7 +244,9 @@ impl Reader<'_> {
                     joined_side = true;
                 }
             }
-            if !ok || (!joined_side && set.len() > 1) {
+            // A floor is parallel to the envelope or square to a side (else
+            // two inclined faces are the sides of a V).
+            if !ok || (!joined_side && set.len() > 1) || (perp == 0 && !self.principal(a)) {
                 continue;
             }
             let area = (geom::loop_area(&self.facts[f].outer) * 1e3) as i64;
@@ -478,15 +483,47 @@ impl Reader<'_> {
             }
         }
         let n_sides = planes.len();
-        let diameter = match (closed, &sides[..]) {
-            (true, s) if curved == s.len() => match self.facts[s[0]].geom {
-                FaceGeom::Cylinder { radius, .. } => Some(2.0 * radius),
-                _ => None,
-            },
+        let plane_of = |f: FaceId| match self.facts[f].geom {
+            FaceGeom::Plane { normal, origin } => planes.iter().position(|(n, e)| {
+                self.parallel(*n, normal) && (normal.dot(origin) - e).abs() <= tol
+            }),
+            _ => None,
+        };
+        // Sides all on one cylinder: a round hole (whole, or cut open by
+        // another feature).
+        let diameter = match sides.first().map(|&f| self.facts[f].geom) {
+            Some(FaceGeom::Cylinder {
+                axis: a0,
+                origin: o0,
+                radius: r0,
+                ..
+            }) if curved == sides.len() => {
+                let coaxial = sides.iter().all(|&f| match self.facts[f].geom {
+                    FaceGeom::Cylinder {
+                        axis,
+                        origin,
+                        radius,
+                        ..
+                    } => {
+                        let d = origin - o0;
+                        axis.dot(a0).abs() > self.cos_tol
+                            && (d - a0 * d.dot(a0)).length() <= tol
+                            && (radius - r0).abs() <= tol
+                    }
+                    _ => false,
+                });
+                coaxial.then_some(2.0 * r0)
+            }
             _ => None,
         };
         use DepressionKind::*;
-        let (kind, rule) = if closed {
+        let (kind, rule) = if diameter.is_some() {
+            if has_floor {
+                (Hole, "recognise.hole.blind")
+            } else {
+                (Hole, "recognise.hole.round")
+            }
+        } else if closed {
             match (has_floor, diameter.is_some()) {
                 (false, true) => (Hole, "recognise.hole.round"),
                 (false, false) => (Hole, "recognise.hole.passage"),
@@ -499,7 +536,12 @@ impl Reader<'_> {
                 1 if slanted => (Step, "recognise.step.slanted"),
                 1 => (Step, "recognise.step.through"),
                 2 => {
-                    let adjacent = sides.len() == 2 && self.joined(sides[0], sides[1]);
+                    // The two sides (each perhaps in pieces) meet at a corner.
+                    let adjacent = sides.iter().any(|&a| {
+                        sides.iter().any(|&b| {
+                            plane_of(a).is_some() && plane_of(a) != plane_of(b) && self.joined(a, b)
+                        })
+                    });
                     if !adjacent {
                         (Slot, "recognise.slot.through")
                     } else if right {
@@ -617,6 +659,19 @@ impl Reader<'_> {
         {
             return None;
         }
+        // A piece of a face split by a feature (coplanar with another face)
+        // is not a chamfer.
+        if let FaceGeom::Plane { origin, .. } = fx.geom {
+            let tol = self.k.distance_tolerance.max(1e-6) * 10.0;
+            let coplanar = self.facts.iter().enumerate().any(|(g, gx)| {
+                g != f
+                    && matches!(gx.geom, FaceGeom::Plane { normal, origin: o }
+                        if self.parallel(normal, n) && (o - origin).dot(n).abs() <= tol)
+            });
+            if coplanar {
+                return None;
+            }
+        }
         // The two longest straight edges.
         let mut edges: Vec<(f64, usize)> = fx
             .neighbours
@@ -649,7 +704,7 @@ impl Reader<'_> {
             let e = &self.brep.edges[fx.neighbours[*i].edge];
             let d = (self.brep.vertices[e.end].point - self.brep.vertices[e.start].point)
                 .normalize_or_zero();
-            d.dot(d0).abs() > 1.0 - self.sin_tol
+            d.dot(d0).abs() > self.cos_tol
         })?;
         if !inclined(edges[0].1) || !inclined(other.1) {
             return None;

@@ -154,11 +154,7 @@ impl MfcadScore {
 
     /// Confusions off the diagonal, most frequent first.
     pub fn confusion_table(&self) -> String {
-        let mut off: Vec<_> = self
-            .confusion
-            .iter()
-            .filter(|((t, p), _)| t != p)
-            .collect();
+        let mut off: Vec<_> = self.confusion.iter().filter(|((t, p), _)| t != p).collect();
         off.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
         let mut s = String::from("truth -> predicted: faces\n");
         for ((t, p), n) in off {
@@ -226,6 +222,23 @@ pub fn score_mfcad_with(
     dir: &Path,
     read: impl Fn(&Path) -> Result<thinplan_brep::Brep, String>,
 ) -> MfcadScore {
+    score(dir, &read, true)
+}
+
+/// As [`score_mfcad_with`], but with the depression recogniser alone (no
+/// faces claimed by walls): the score of this module's rules.
+pub fn score_mfcad_depressions_with(
+    dir: &Path,
+    read: impl Fn(&Path) -> Result<thinplan_brep::Brep, String>,
+) -> MfcadScore {
+    score(dir, &read, false)
+}
+
+fn score(
+    dir: &Path,
+    read: &dyn Fn(&Path) -> Result<thinplan_brep::Brep, String>,
+    walls: bool,
+) -> MfcadScore {
     let mut score = MfcadScore::default();
     let k = match thinplan_knowledge::Knowledge::builtin() {
         Ok(k) => k,
@@ -279,10 +292,22 @@ pub fn score_mfcad_with(
                 continue;
             }
         };
-        let rec = crate::recognise(&brep, DVec3::Z, &k, &machine);
+        let features = if walls {
+            crate::recognise(&brep, DVec3::Z, &k, &machine).features
+        } else {
+            let adjacency = thinplan_brep::edge_adjacency(&brep);
+            crate::depressions::find_depressions(
+                &brep,
+                &adjacency,
+                DVec3::Z,
+                &k.depression_recognition,
+                &std::collections::BTreeSet::new(),
+                &mut Vec::new(),
+            )
+        };
         let mut predicted = vec!["stock".to_string(); brep.faces.len()];
         let mut wall = vec![false; brep.faces.len()];
-        for f in &rec.features {
+        for f in &features {
             let c = mfcad_class(f);
             for &face in &f.faces {
                 if face < predicted.len() {

@@ -2,7 +2,9 @@
 //! sampled boundaries, hull tests, 2D profiles in a feature frame.
 
 use glam::{DVec2, DVec3};
-use thinplan_brep::{Brep, Convexity, EdgeAdjacency, EdgeId, FaceId, Frame, Surface, TessTolerance};
+use thinplan_brep::{
+    Brep, Convexity, EdgeAdjacency, EdgeId, FaceId, Frame, Surface, TessTolerance,
+};
 
 /// What the recogniser needs to know of one face's surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -131,7 +133,10 @@ pub fn face_facts(brep: &Brep, adjacency: &[EdgeAdjacency], tol: f64) -> Vec<Fac
         });
     }
     // Hull test against every boundary point of the part.
-    let all: Vec<DVec3> = facts.iter().flat_map(|x| x.points.iter().copied()).collect();
+    let all: Vec<DVec3> = facts
+        .iter()
+        .flat_map(|x| x.points.iter().copied())
+        .collect();
     for fx in facts.iter_mut() {
         if let FaceGeom::Plane { normal, origin } = fx.geom {
             fx.hull = all.iter().all(|p| (*p - origin).dot(normal) <= tol);
