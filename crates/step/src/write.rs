@@ -329,11 +329,7 @@ impl<'b> Writer<'b> {
                     control_points.len() > 1 && control_points.first() == control_points.last(),
                 );
                 let (mults, ks) = compress_knots(knots);
-                let k = format!(
-                    "{},{},.UNSPECIFIED.",
-                    int_list(&mults),
-                    real_list(&ks)
-                );
+                let k = format!("{},{},.UNSPECIFIED.", int_list(&mults), real_list(&ks));
                 if weights.is_empty() {
                     self.add(format!(
                         "B_SPLINE_CURVE_WITH_KNOTS('',{degree},{cps},.UNSPECIFIED.,{closed},.F.,{k})"

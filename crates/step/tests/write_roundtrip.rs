@@ -48,7 +48,11 @@ fn assert_same(a: &Brep, b: &Brep, what: &str) {
     assert_eq!(a.vertices.len(), b.vertices.len(), "{what}: vertices");
     for (sa, sb) in a.solids.iter().zip(&b.solids) {
         assert_eq!(sa.name, sb.name, "{what}: solid name");
-        assert_eq!(sa.shells.len(), sb.shells.len(), "{what}: shells of a solid");
+        assert_eq!(
+            sa.shells.len(),
+            sb.shells.len(),
+            "{what}: shells of a solid"
+        );
     }
     let in_void: Vec<bool> = {
         let mut v = vec![false; a.faces.len()];
@@ -112,11 +116,19 @@ fn assert_same(a: &Brep, b: &Brep, what: &str) {
     let mut targets: Vec<usize> = vert_map.values().copied().collect();
     targets.sort_unstable();
     targets.dedup();
-    assert_eq!(targets.len(), vert_map.len(), "{what}: vertex map not injective");
+    assert_eq!(
+        targets.len(),
+        vert_map.len(),
+        "{what}: vertex map not injective"
+    );
     let mut targets: Vec<usize> = edge_map.values().copied().collect();
     targets.sort_unstable();
     targets.dedup();
-    assert_eq!(targets.len(), edge_map.len(), "{what}: edge map not injective");
+    assert_eq!(
+        targets.len(),
+        edge_map.len(),
+        "{what}: edge map not injective"
+    );
 
     let (va, vb) = (a.volume(), b.volume());
     assert!(
@@ -131,7 +143,10 @@ fn assert_close<T: serde::Serialize>(a: &T, b: &T, what: &str) {
     fn walk(a: &Value, b: &Value, path: &mut String) -> Result<(), String> {
         match (a, b) {
             (Value::Number(x), Value::Number(y)) => {
-                let (x, y) = (x.as_f64().unwrap_or(f64::NAN), y.as_f64().unwrap_or(f64::NAN));
+                let (x, y) = (
+                    x.as_f64().unwrap_or(f64::NAN),
+                    y.as_f64().unwrap_or(f64::NAN),
+                );
                 if (x - y).abs() <= 1e-9 * x.abs().max(1.0) {
                     Ok(())
                 } else {
@@ -197,7 +212,11 @@ fn native_samples_round_trip() {
         let exact = thinplan_native::mass::volume(&back);
         let expected = part.expected_volume();
         let rel = (exact - expected).abs() / expected;
-        assert!(rel <= 1e-6, "{}: exact volume {exact} vs {expected}", part.name());
+        assert!(
+            rel <= 1e-6,
+            "{}: exact volume {exact} vs {expected}",
+            part.name()
+        );
         eprintln!(
             "{}: {faces} faces, {} edges, {} vertices; volume {volume:.3} (tessellated), \
              {exact:.6} exact read back, expected {expected:.6} (rel. {rel:.1e})",
