@@ -125,6 +125,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Write a part (STEP, native or builtin:NAME) as a STEP AP214 file.
+    ExportStep { part: String, out: PathBuf },
     /// List the bundled sample parts.
     Samples,
 }
@@ -209,6 +211,22 @@ fn run(command: Command) -> Result<(), CliError> {
                 kind: "input",
                 message,
             })
+        }
+        Command::ExportStep { part, out } => {
+            let imported = thinplan_import::import(&part)?;
+            let name = imported
+                .part
+                .source
+                .trim_start_matches("builtin:")
+                .to_string();
+            let text = thinplan_step::write_step(&imported.brep, &name);
+            thinplan_plan::io::write_atomic(&out, text.as_bytes()).map_err(|e| CliError {
+                code: exit::OUTPUT,
+                kind: "output",
+                message: error_chain(&e),
+            })?;
+            eprintln!("wrote {}", out.display());
+            Ok(())
         }
         Command::Samples => {
             for (name, _) in thinplan_import::SAMPLES {

@@ -210,3 +210,28 @@ fn size_wall_gives_the_sizes_that_machined_well_in_appendix_a() {
     let (code, v) = run_json(thinplan().args(["size-wall", "120", "-1", "72", "--json"]));
     assert_eq!(code, 3, "{v}");
 }
+
+#[test]
+fn exported_samples_read_back_with_the_same_volume() {
+    let d = tmp("export");
+    for name in ["tall_rib", "wall_holes"] {
+        let out = d.join(format!("{name}.step"));
+        let status = thinplan()
+            .args(["export-step", &format!("builtin:{name}")])
+            .arg(&out)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let (code, v) = run_json(thinplan().args(["inspect", "--json"]).arg(&out));
+        assert_eq!(code, 0, "{v}");
+        let expected = thinplan_native::parse_part(thinplan_import::sample(name).unwrap(), name)
+            .unwrap()
+            .expected_volume();
+        let got = v["volume"].as_f64().unwrap();
+        assert!(
+            (got - expected).abs() <= 1e-3 * expected,
+            "{name}: {got} vs {expected}"
+        );
+        assert_eq!(v["units"], "mm");
+    }
+}
