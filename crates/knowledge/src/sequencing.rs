@@ -59,6 +59,7 @@ pub enum SequenceAction {
 
 /// A condition on an ordered pair of stiffness features.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum PairCondition {
     /// Every condition holds (must not be empty).
     All(Vec<PairCondition>),

@@ -224,6 +224,7 @@ impl Builder {
 
     /// Checks and applies `c` (between indices `a` and `b`). With `keep`, a
     /// redundant constraint is still recorded (a planner's explicit edit).
+    #[allow(clippy::result_large_err)] // a refusal is the plan's own record
     fn apply(
         &mut self,
         c: Constraint<StiffnessFeatureId>,
@@ -402,6 +403,7 @@ impl Builder {
 /// The refusal is also appended to `s.refusals`. Assumes `s` is consistent
 /// (as [`sequence`] and `try_add` leave it): existing constraints that are
 /// not are ignored in the check.
+#[allow(clippy::result_large_err)] // a refusal is the plan's own record, kept whole
 pub fn try_add(s: &mut Sequencing, c: Constraint<StiffnessFeatureId>) -> Result<(), Refusal> {
     let mut ids: BTreeSet<StiffnessFeatureId> = BTreeSet::new();
     for x in &s.constraints {

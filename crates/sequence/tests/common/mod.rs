@@ -1,5 +1,5 @@
 //! Hand-built stiffness features for the sequencing tests.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::too_many_arguments)]
 
 use std::path::Path;
 
