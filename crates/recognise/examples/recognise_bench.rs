@@ -83,13 +83,34 @@ fn main() {
             .filter(|f| f.kind == thinplan_plan::StiffnessKind::Wall)
             .count();
         assert_eq!(got, walls * cells, "every cell recognised the same");
+        // Phases: adjacency, walls, everything else.
+        let t0 = std::time::Instant::now();
+        let adj = thinplan_brep::edge_adjacency(&brep);
+        let t_adj = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = std::time::Instant::now();
+        let mut w = Vec::new();
+        let ws = thinplan_recognise::walls::find_walls(
+            &brep,
+            &adj,
+            DVec3::Z,
+            &k.wall_recognition,
+            &mut w,
+        );
+        let t_walls = t1.elapsed().as_secs_f64() * 1e3;
+        let t2 = std::time::Instant::now();
+        let _ =
+            thinplan_recognise::connect::connect(&brep, &adj, DVec3::Z, &ws, &k.wall_recognition);
+        let t_conn = t2.elapsed().as_secs_f64() * 1e3;
         println!(
-            "{:>8} | {:>6} | {:>9} | {:>8.1} | {:>10.1}",
+            "{:>8} | {:>6} | {:>9} | {:>8.1} | {:>10.1} | adjacency {:.1} walls {:.1} connect(walls) {:.1}",
             brep.faces.len(),
             cells,
             r.features.len(),
             ms,
-            ms * 1e3 / brep.faces.len() as f64
+            ms * 1e3 / brep.faces.len() as f64,
+            t_adj,
+            t_walls,
+            t_conn
         );
     }
 }

@@ -579,15 +579,17 @@ fn tris_of(
 /// Faces of one direction bucket grouped by plane offset (slices), each
 /// slice sorted by the 2D box's low x with the widest box remembered, so
 /// that a box query touches only nearby faces.
+/// One slice: (offset, entries (box min.x, face index in bucket), widest box).
+type Slice = (f64, Vec<(f64, usize)>, f64);
+
 struct Slices {
-    /// (offset, entries (min.x, face index in bucket), max box width).
-    slices: Vec<(f64, Vec<(f64, usize)>, f64)>,
+    slices: Vec<Slice>,
     boxes: Vec<(DVec2, DVec2)>,
 }
 
 impl Slices {
     fn new(faces: &[PlaneFace], boxes: &[(DVec2, DVec2)], tol: f64) -> Slices {
-        let mut slices: Vec<(f64, Vec<(f64, usize)>, f64)> = Vec::new();
+        let mut slices: Vec<Slice> = Vec::new();
         for (i, f) in faces.iter().enumerate() {
             let w = boxes[i].1.x - boxes[i].0.x;
             match slices.last_mut() {
