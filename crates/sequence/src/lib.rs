@@ -59,6 +59,61 @@ pub struct Sequencing {
     pub groups: Vec<Vec<StiffnessFeatureId>>,
 }
 
+impl Sequencing {
+    /// The sequencing recorded in a plan: its stiffness constraints, the
+    /// refusals of the sequence stage, and the groups they make.
+    pub fn from_plan(plan: &Plan) -> Sequencing {
+        let mut s = Sequencing {
+            constraints: plan.stiffness_constraints.clone(),
+            refusals: plan
+                .refusals
+                .iter()
+                .filter(|r| r.stage == Stage::Sequence)
+                .cloned()
+                .collect(),
+            groups: Vec::new(),
+        };
+        let mut uf = UnionFind::<usize>::new(plan.stiffness_features.len());
+        let index: BTreeMap<StiffnessFeatureId, usize> = plan
+            .stiffness_features
+            .iter()
+            .enumerate()
+            .map(|(i, f)| (f.id, i))
+            .collect();
+        for c in &s.constraints {
+            if let (ConstraintKind::Simultaneous, Some(&a), Some(&b)) =
+                (c.kind, index.get(&c.first), index.get(&c.second))
+            {
+                uf.union(a, b);
+            }
+        }
+        let mut by_rep: BTreeMap<usize, Vec<StiffnessFeatureId>> = BTreeMap::new();
+        for (i, f) in plan.stiffness_features.iter().enumerate() {
+            by_rep.entry(uf.find(i)).or_default().push(f.id);
+        }
+        s.groups = by_rep
+            .into_values()
+            .filter(|g| g.len() > 1)
+            .map(|mut g| {
+                g.sort();
+                g
+            })
+            .collect();
+        s.groups.sort();
+        s
+    }
+
+    /// Writes the result into a plan: the results of this stage and every
+    /// later one are dropped first ([`Plan::invalidate_from`]), then its
+    /// constraints and refusals recorded and the stage listed as done.
+    pub fn apply_to(self, plan: &mut Plan) {
+        plan.invalidate_from(Stage::Sequence);
+        plan.stiffness_constraints = self.constraints;
+        plan.refusals.extend(self.refusals);
+        plan.stages_done.push(Stage::Sequence);
+    }
+}
+
 /// Runs the stage on a plan that has its features and connections.
 pub fn run(plan: &Plan, knowledge: &Knowledge) -> Sequencing {
     sequence(
