@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use thinplan_import::{ImportError, ImportedPart};
 use thinplan_knowledge::Knowledge;
-use thinplan_plan::{Plan, Provenance, ProvenanceSource, Setup};
+use thinplan_plan::{Plan, Provenance, ProvenanceSource, Setup, Stage};
 
 mod pocket_cmd;
 
@@ -34,6 +34,31 @@ mod exit {
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+/// The set-up, shared by every command that plans: a set-up file and/or flags
+/// (a flag overrides the file; the knowledge's defaults fill the rest).
+#[derive(clap::Args)]
+struct SetupOpts {
+    /// Set-up file (RON): `(up: (0.0, 0.0, 1.0), machine: "…", tool_set: "…", material: "…")`,
+    /// every field optional.
+    #[arg(long)]
+    setup: Option<PathBuf>,
+    /// The spindle axis in part coordinates, "x,y,z" (default 0,0,1).
+    #[arg(long)]
+    up: Option<String>,
+    /// Machine id (from the knowledge's machines/).
+    #[arg(long)]
+    machine: Option<String>,
+    /// Tool set id (from the knowledge's tools/).
+    #[arg(long)]
+    tools: Option<String>,
+    /// Material id (from the knowledge's materials/).
+    #[arg(long)]
+    material: Option<String>,
+    /// Knowledge directory (default: the knowledge built into thinplan).
+    #[arg(long)]
+    knowledge: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -63,24 +88,24 @@ enum Command {
         /// Where to write the plan (default: out/NAME.plan.json).
         #[arg(long, short)]
         out: Option<PathBuf>,
-        /// The spindle axis in part coordinates, "x,y,z" (default 0,0,1).
-        #[arg(long, default_value = "0,0,1")]
-        up: String,
-        /// Machine id (from the knowledge's machines/).
-        #[arg(long, default_value = thinplan_knowledge::DEFAULT_MACHINE)]
-        machine: String,
-        /// Tool set id (from the knowledge's tools/).
-        #[arg(long, default_value = thinplan_knowledge::DEFAULT_TOOL_SET)]
-        tools: String,
-        /// Material id (from the knowledge's materials/).
-        #[arg(long, default_value = thinplan_knowledge::DEFAULT_MATERIAL)]
-        material: String,
-        /// Knowledge directory (default: the knowledge built into thinplan).
-        #[arg(long)]
-        knowledge: Option<PathBuf>,
+        #[command(flatten)]
+        setup: SetupOpts,
         /// Machine-readable summary on stdout; no progress output.
         #[arg(long)]
         json: bool,
+    },
+    /// Recognise stiffness features and their connections (stages 2-3).
+    Recognize {
+        /// Part file, or builtin:NAME.
+        part: String,
+        #[command(flatten)]
+        setup: SetupOpts,
+        /// The features and connections as JSON (docs/CLI.md).
+        #[arg(long)]
+        json: bool,
+        /// Write a picture of the part coloured by feature, with the connection graph.
+        #[arg(long)]
+        svg: Option<PathBuf>,
     },
     /// Load and validate a knowledge directory; list every problem found.
     CheckKnowledge {
@@ -137,6 +162,7 @@ fn main() -> ExitCode {
         cli.command,
         Command::Inspect { json: true, .. }
             | Command::Plan { json: true, .. }
+            | Command::Recognize { json: true, .. }
             | Command::CheckKnowledge { json: true, .. }
             | Command::SizeWall { json: true, .. }
             | Command::Pocket { json: true, .. }
@@ -160,24 +186,15 @@ fn run(command: Command) -> Result<(), CliError> {
         Command::Plan {
             part,
             out,
-            up,
-            machine,
-            tools,
-            material,
-            knowledge,
+            setup,
             json,
-        } => plan(
+        } => plan(part, out, &setup, json),
+        Command::Recognize {
             part,
-            out,
-            SetupArgs {
-                up: &up,
-                machine,
-                tools,
-                material,
-            },
-            knowledge.as_deref(),
+            setup,
             json,
-        ),
+            svg,
+        } => recognize(&part, &setup, json, svg.as_deref()),
         Command::CheckKnowledge { dir, json } => check_knowledge(dir.as_deref(), json),
         Command::SizeWall {
             length,
@@ -357,16 +374,28 @@ struct PlanReport<'a> {
     faces: usize,
     volume: f64,
     stiffness_features: usize,
+    connections: usize,
+    stiffness_constraints: usize,
+    refusals: usize,
     machining_features: usize,
     operations: usize,
     warnings: &'a [String],
 }
 
-struct SetupArgs<'a> {
-    up: &'a str,
+struct ResolvedSetup {
     machine: String,
     tools: String,
     material: String,
+}
+
+/// A set-up file: every field optional.
+#[derive(serde::Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct SetupFile {
+    up: Option<(f64, f64, f64)>,
+    machine: Option<String>,
+    tool_set: Option<String>,
+    material: Option<String>,
 }
 
 fn load_knowledge(dir: Option<&Path>) -> Result<Knowledge, CliError> {
@@ -432,8 +461,37 @@ fn check_knowledge(dir: Option<&Path>, json: bool) -> Result<(), CliError> {
 
 /// Checks the set-up against the knowledge: the resources exist and the
 /// machine can reach the spindle direction.
-fn make_setup(args: &SetupArgs, k: &Knowledge) -> Result<Setup, CliError> {
-    let up = parse_up(args.up)?;
+fn make_setup(opts: &SetupOpts, k: &Knowledge) -> Result<Setup, CliError> {
+    let file: SetupFile = match &opts.setup {
+        Some(path) => thinplan_knowledge::load_ron(path).map_err(|e| CliError {
+            code: exit::BAD_INPUT,
+            kind: "input",
+            message: e.to_string(),
+        })?,
+        None => SetupFile::default(),
+    };
+    let up = match (&opts.up, file.up) {
+        (Some(text), _) => parse_up(text)?,
+        (None, Some((x, y, z))) => parse_up(&format!("{x},{y},{z}"))?,
+        (None, None) => glam::DVec3::Z,
+    };
+    let args = ResolvedSetup {
+        machine: opts
+            .machine
+            .clone()
+            .or(file.machine)
+            .unwrap_or_else(|| thinplan_knowledge::DEFAULT_MACHINE.into()),
+        tools: opts
+            .tools
+            .clone()
+            .or(file.tool_set)
+            .unwrap_or_else(|| thinplan_knowledge::DEFAULT_TOOL_SET.into()),
+        material: opts
+            .material
+            .clone()
+            .or(file.material)
+            .unwrap_or_else(|| thinplan_knowledge::DEFAULT_MATERIAL.into()),
+    };
     let missing = |what: &str, id: &str, known: Vec<&String>| CliError {
         code: exit::KNOWLEDGE,
         kind: "knowledge",
@@ -458,10 +516,17 @@ fn make_setup(args: &SetupArgs, k: &Knowledge) -> Result<Setup, CliError> {
         machine: args.machine.clone(),
         tool_set: args.tools.clone(),
         material: args.material.clone(),
-        provenance: Provenance::new(ProvenanceSource::User, "cli.setup")
-            .with_value("up_x", up.x)
-            .with_value("up_y", up.y)
-            .with_value("up_z", up.z),
+        provenance: Provenance::new(
+            ProvenanceSource::User,
+            if opts.setup.is_some() {
+                "cli.setup_file"
+            } else {
+                "cli.setup"
+            },
+        )
+        .with_value("up_x", up.x)
+        .with_value("up_y", up.y)
+        .with_value("up_z", up.z),
     })
 }
 
@@ -495,24 +560,27 @@ fn check_fits(part: &thinplan_plan::PartRef, setup: &Setup, k: &Knowledge) -> Re
 fn plan(
     part: Option<String>,
     out: Option<PathBuf>,
-    setup_args: SetupArgs,
-    knowledge_dir: Option<&Path>,
+    setup_opts: &SetupOpts,
     json: bool,
 ) -> Result<(), CliError> {
     let source = part.unwrap_or_else(|| format!("builtin:{}", thinplan_import::DEFAULT_SAMPLE));
-    let knowledge = load_knowledge(knowledge_dir)?;
+    let knowledge = load_knowledge(setup_opts.knowledge.as_deref())?;
     // Validate the set-up before the (possibly long) import.
-    let setup = make_setup(&setup_args, &knowledge)?;
+    let setup = make_setup(setup_opts, &knowledge)?;
     let progress = if json {
         ProgressBar::hidden()
     } else {
         // Draws only when stderr is a terminal.
-        ProgressBar::new(2).with_style(
+        ProgressBar::new(4).with_style(
             ProgressStyle::with_template("{spinner} [{pos}/{len}] {msg}").expect("valid template"),
         )
     };
     progress.set_message(format!("import {source}"));
-    let ImportedPart { part, warnings, .. } = thinplan_import::import(&source)?;
+    let ImportedPart {
+        part,
+        brep,
+        mut warnings,
+    } = thinplan_import::import(&source)?;
     progress.inc(1);
     progress.set_message("set-up");
     check_fits(&part, &setup, &knowledge)?;
@@ -521,6 +589,19 @@ fn plan(
         .insert("knowledge".into(), knowledge.origin.clone());
     plan.notes
         .insert("thinplan_version".into(), env!("CARGO_PKG_VERSION").into());
+    progress.inc(1);
+    progress.set_message("recognise, connect");
+    let machine = knowledge
+        .machine(&plan.setup.machine)
+        .expect("checked in make_setup");
+    let recognition = thinplan_recognise::recognise(&brep, plan.setup.up, &knowledge, machine);
+    plan.stiffness_features = recognition.features;
+    plan.connections = recognition.connections;
+    plan.stages_done.extend([Stage::Recognise, Stage::Connect]);
+    warnings.extend(recognition.warnings);
+    progress.inc(1);
+    progress.set_message("sequence");
+    thinplan_sequence::run(&plan, &knowledge).apply_to(&mut plan);
     progress.inc(1);
     progress.finish_and_clear();
 
@@ -545,6 +626,9 @@ fn plan(
         faces: plan.part.summary.faces,
         volume: plan.part.summary.volume,
         stiffness_features: plan.stiffness_features.len(),
+        connections: plan.connections.len(),
+        stiffness_constraints: plan.stiffness_constraints.len(),
+        refusals: plan.refusals.len(),
         machining_features: plan.machining_features.len(),
         operations: plan.operations.len(),
         warnings: &warnings,
@@ -642,6 +726,74 @@ fn size_wall(
             "  B_RF {:.2} mm, h {:.2} mm, H {:.2} mm; deflection {:.4} mm (allowed {} mm)",
             sized.b_rf, sized.h, sized.big_h, sized.deflection, k.sizing.allowed_deflection
         );
+    }
+    Ok(())
+}
+
+fn recognize(
+    source: &str,
+    setup_opts: &SetupOpts,
+    json: bool,
+    svg: Option<&Path>,
+) -> Result<(), CliError> {
+    let knowledge = load_knowledge(setup_opts.knowledge.as_deref())?;
+    let setup = make_setup(setup_opts, &knowledge)?;
+    let imported = thinplan_import::import(source)?;
+    let machine = knowledge
+        .machine(&setup.machine)
+        .expect("checked in make_setup");
+    let r = thinplan_recognise::recognise(&imported.brep, setup.up, &knowledge, machine);
+    if let Some(path) = svg {
+        let picture = thinplan_recognise::report::to_svg(&r, &imported.brep);
+        thinplan_plan::io::write_atomic(path, picture.as_bytes()).map_err(|e| CliError {
+            code: exit::OUTPUT,
+            kind: "output",
+            message: error_chain(&e),
+        })?;
+    }
+    if json {
+        println!(
+            "{}",
+            thinplan_recognise::report::to_json(&r, &imported.brep)
+        );
+    } else {
+        println!(
+            "{} stiffness feature(s), {} connection(s)",
+            r.features.len(),
+            r.connections.len()
+        );
+        for f in &r.features {
+            let role = f
+                .role
+                .map(thinplan_recognise::report::role_name)
+                .unwrap_or("");
+            let t = f
+                .thickness
+                .map(|t| format!(" t={t:.3}"))
+                .unwrap_or_default();
+            let d = f.diameter.map(|d| format!(" d={d:.3}")).unwrap_or_default();
+            println!(
+                "  {} {} {}{}{} h={:.3} l={:.3} faces={:?}",
+                f.id,
+                thinplan_recognise::report::kind_name(f.kind),
+                role,
+                t,
+                d,
+                f.height,
+                f.length,
+                f.faces
+            );
+        }
+        for c in &r.connections {
+            let kind = match c.kind {
+                thinplan_plan::ConnectionKind::BaseLeaf => "base-leaf",
+                thinplan_plan::ConnectionKind::Crossing => "crossing",
+            };
+            println!("  {} -> {} {kind}", c.base, c.leaf);
+        }
+        for w in &r.warnings {
+            println!("warning: {w}");
+        }
     }
     Ok(())
 }

@@ -235,3 +235,70 @@ fn exported_samples_read_back_with_the_same_volume() {
         assert_eq!(v["units"], "mm");
     }
 }
+
+#[test]
+fn recognize_finds_the_appendix_a_rib_and_draws_it() {
+    let d = tmp("recognize");
+    let svg = d.join("tall_rib.svg");
+    let (code, v) = run_json(
+        thinplan()
+            .args(["recognize", "builtin:tall_rib", "--json", "--svg"])
+            .arg(&svg),
+    );
+    assert_eq!(code, 0, "{v}");
+    let features = v["features"].as_array().unwrap();
+    // The part is the appendix A test wall: 120 long, 1 thick, 72 high.
+    let rib = features
+        .iter()
+        .find(|f| f["role"] == "rib")
+        .unwrap_or_else(|| panic!("no rib in {v}"));
+    assert_eq!(rib["kind"], "wall");
+    assert!(
+        (rib["thickness"].as_f64().unwrap() - 1.0).abs() < 0.01,
+        "{rib}"
+    );
+    assert!(
+        (rib["height"].as_f64().unwrap() - 72.0).abs() < 0.01,
+        "{rib}"
+    );
+    assert!(
+        (rib["length"].as_f64().unwrap() - 120.0).abs() < 0.01,
+        "{rib}"
+    );
+    let axis: Vec<f64> = rib["axis"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!(
+        (axis[2]).abs() < 1e-9,
+        "a rib's normal is horizontal: {axis:?}"
+    );
+    assert_eq!(
+        rib["faces"].as_array().unwrap().len(),
+        rib["face_names"].as_array().unwrap().len()
+    );
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    assert!(picture.starts_with("<svg") || picture.starts_with("<?xml"));
+
+    // The same set-up from a file gives the same features.
+    let setup = d.join("setup.ron");
+    std::fs::write(&setup, "(up: (0.0, 0.0, 1.0), machine: \"hsm_5axis\")").unwrap();
+    let (code, w) = run_json(
+        thinplan()
+            .args(["recognize", "builtin:tall_rib", "--json", "--setup"])
+            .arg(&setup),
+    );
+    assert_eq!(code, 0, "{w}");
+    assert_eq!(v, w);
+    // A set-up file with a typo is refused with its place.
+    std::fs::write(&setup, "(upp: (0.0, 0.0, 1.0))").unwrap();
+    let (code, w) = run_json(
+        thinplan()
+            .args(["recognize", "builtin:tall_rib", "--json", "--setup"])
+            .arg(&setup),
+    );
+    assert_eq!(code, 3, "{w}");
+    assert!(w["error"].as_str().unwrap().contains("setup.ron:1:"), "{w}");
+}

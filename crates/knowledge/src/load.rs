@@ -57,18 +57,22 @@ fn offset_of(text: &str, line: usize, column: usize) -> usize {
 
 /// Parses RON text into `T`; `path` names the origin in errors.
 pub fn parse_ron<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, KnowledgeError> {
-    ron::Options::default().from_str::<T>(text).map_err(|e| {
-        let (line, column) = (e.span.start.line, e.span.start.col);
-        let offset = offset_of(text, line, column);
-        KnowledgeError::Syntax {
-            path: path.to_path_buf(),
-            line,
-            column,
-            reason: e.code.to_string(),
-            src: NamedSource::new(path.display().to_string(), text.to_string()),
-            span: SourceSpan::from((offset, 0)),
-        }
-    })
+    // Optional fields may be written without `Some(…)`, as knowledge engineers expect.
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str::<T>(text)
+        .map_err(|e| {
+            let (line, column) = (e.span.start.line, e.span.start.col);
+            let offset = offset_of(text, line, column);
+            KnowledgeError::Syntax {
+                path: path.to_path_buf(),
+                line,
+                column,
+                reason: e.code.to_string(),
+                src: NamedSource::new(path.display().to_string(), text.to_string()),
+                span: SourceSpan::from((offset, 0)),
+            }
+        })
 }
 
 /// Reads and parses one RON file.
