@@ -1,11 +1,15 @@
-//! Prints what recognition finds on sample parts (debug aid).
+//! Prints what recognition finds on sample parts or STEP files (debug aid).
 use glam::DVec3;
 fn main() {
     let k = thinplan_knowledge::Knowledge::builtin().unwrap();
     let m = k.machines["hsm_5axis"].clone();
     for p in std::env::args().skip(1) {
-        let part = thinplan_native::load_part(std::path::Path::new(&p)).unwrap();
-        let brep = part.build().unwrap();
+        let path = std::path::Path::new(&p);
+        let brep = if p.ends_with(".step") || p.ends_with(".stp") {
+            thinplan_step::read_step_file(path).unwrap().brep
+        } else {
+            thinplan_native::load_part(path).unwrap().build().unwrap()
+        };
         let t = std::time::Instant::now();
         let r = thinplan_recognise::recognise(
             &brep,

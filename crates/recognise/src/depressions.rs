@@ -3,7 +3,15 @@
 //!
 //! # Algorithm
 //!
-//! Only the faces walls did not claim are read.
+//! All faces are read, also those of walls: walls and depressions may share
+//! faces (a slot beside a thin slab keeps the slab's side as its own side).
+//! "The wall wins" (thesis figure 5.8) is applied afterwards, precisely: a
+//! face set whose faces, apart from corner blends, all belong to walls (a
+//! web face as floor, wall sides as sides: the space between isogrid ribs,
+//! or between two ribs on a web) is the space between walls, not a
+//! depression, and is dropped (with a warning only when it is ambiguous:
+//! no web face among them); its corner blends become fillet details. A set
+//! with at least one face no wall owns stays a depression.
 //!
 //! 1. **Envelope faces.** A planar face with the whole part behind its plane
 //!    lies on the convex hull: a face of the stock envelope (or a chamfer on
@@ -43,36 +51,51 @@
 //! side–side corners are right angles), `min_corner_deg`, `slanted`,
 //! `depth`.
 
-use std::collections::BTreeSet;
-
 use glam::{DVec2, DVec3};
 use thinplan_brep::{Brep, Convexity, EdgeAdjacency, FaceId};
 use thinplan_knowledge::{DepressionKind, DepressionRecognition};
 use thinplan_plan::{
     Prism, PrismFrame, ProfileLoop, ProfileVertex, Provenance, ProvenanceSource, Region,
-    StiffnessFeature, StiffnessFeatureId, StiffnessKind,
+    StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
 };
 
 mod geom;
 
 use geom::{convex_hull, face_facts, frame_for, polygon_corners, signed_area, FaceFacts, FaceGeom};
 
-/// Finds depressions and details among the faces walls did not claim
-/// (ids are assigned by the caller).
+/// Finds depressions and details on all faces of `brep`; `walls` (the wall
+/// recogniser's features, may be empty) decide which face sets are the space
+/// between walls (dropped: the wall wins) and which faces may carry details
+/// (only faces no wall owns). Ids are assigned by the caller.
 pub fn find_depressions(
     brep: &Brep,
     adjacency: &[EdgeAdjacency],
     _up: DVec3,
     k: &DepressionRecognition,
-    claimed: &BTreeSet<FaceId>,
+    walls: &[StiffnessFeature],
     warnings: &mut Vec<String>,
 ) -> Vec<StiffnessFeature> {
     let facts = face_facts(brep, adjacency, k.distance_tolerance.max(1e-9));
+    let mut wall_face = vec![WallFace::None; brep.faces.len()];
+    for w in walls.iter().filter(|w| w.kind == StiffnessKind::Wall) {
+        let web = w.role == Some(WallRole::Web);
+        for &f in &w.faces {
+            if let Some(x) = wall_face.get_mut(f) {
+                *x = match (*x, web) {
+                    (WallFace::None | WallFace::Web, true) => WallFace::Web,
+                    (WallFace::None | WallFace::Side, false) => WallFace::Side,
+                    _ => WallFace::Both,
+                };
+            }
+        }
+    }
+    let wall_end = wall_ends(walls, &facts, &wall_face, k);
     let r = Reader {
         brep,
         facts: &facts,
         k,
-        claimed,
+        wall_face: &wall_face,
+        wall_end: &wall_end,
         sin_tol: k.angle_tolerance_deg.to_radians().sin(),
         cos_tol: k.angle_tolerance_deg.to_radians().cos(),
     };
@@ -83,12 +106,93 @@ struct Reader<'a> {
     brep: &'a Brep,
     facts: &'a [FaceFacts],
     k: &'a DepressionRecognition,
-    claimed: &'a BTreeSet<FaceId>,
+    /// Which wall (if any) lists each face.
+    wall_face: &'a [WallFace],
+    /// Faces walls do not list that are their ends or tops (planar, square
+    /// to the wall, inside its slab, next to its sides).
+    wall_end: &'a [bool],
     /// Sine of the angle tolerance: `|a·b|` below it is perpendicular,
     /// above `1 −` it parallel.
     sin_tol: f64,
     /// Cosine of the angle tolerance: `a·b` above it is parallel.
     cos_tol: f64,
+}
+
+/// The end and top faces of planar standing walls: faces next to both of a
+/// wall's sides, planar, square to the wall normal, lying inside its slab. They belong to
+/// the wall's solid though the wall does not list them (a rib's end at the
+/// rim of the web it stands on).
+fn wall_ends(
+    walls: &[StiffnessFeature],
+    facts: &[FaceFacts],
+    wall_face: &[WallFace],
+    k: &DepressionRecognition,
+) -> Vec<bool> {
+    let mut end = vec![false; facts.len()];
+    let tol = k.distance_tolerance.max(1e-6) * 10.0;
+    let sin_tol = k.angle_tolerance_deg.to_radians().sin();
+    // Standing walls only: a web's slab may be thick (a support base) and
+    // hold the sides of depressions cut into it.
+    for w in walls
+        .iter()
+        .filter(|w| w.kind == StiffnessKind::Wall && w.role != Some(WallRole::Web))
+    {
+        let (Some(t), Some(shape)) = (w.thickness, w.shape.as_ref()) else {
+            continue;
+        };
+        let n = shape.frame.z;
+        if n.dot(w.axis).abs() < 1.0 - sin_tol {
+            continue; // a curved wall: its frame is the cylinder's
+        }
+        let o = shape.frame.origin;
+        for &f in &w.faces {
+            let Some(fx) = facts.get(f) else { continue };
+            for nb in &fx.neighbours {
+                let g = nb.face;
+                if end[g] || wall_face[g] != WallFace::None {
+                    continue;
+                }
+                let gx = &facts[g];
+                let square = gx.geom.normal().is_some_and(|m| m.dot(n).abs() < sin_tol);
+                // Next to both sides: two of the wall's faces on either side
+                // of its mid-plane.
+                let sides = gx
+                    .neighbours
+                    .iter()
+                    .filter(|m| w.faces.contains(&m.face))
+                    .map(|m| {
+                        facts[m.face]
+                            .geom
+                            .normal()
+                            .map_or(0, |q| q.dot(n).signum() as i32)
+                    })
+                    .collect::<Vec<i32>>();
+                let both = sides.contains(&1) && sides.contains(&-1);
+                if square
+                    && both
+                    && gx
+                        .points
+                        .iter()
+                        .all(|p| (*p - o).dot(n).abs() <= 0.5 * t + tol)
+                {
+                    end[g] = true;
+                }
+            }
+        }
+    }
+    end
+}
+
+/// How a face belongs to walls.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum WallFace {
+    None,
+    /// A face of a web (a wall whose normal is along `up`).
+    Web,
+    /// A side face of a standing wall (rib, flange).
+    Side,
+    /// Both (a face two walls list).
+    Both,
 }
 
 /// What one depression face set was read as.
@@ -107,10 +211,8 @@ struct Reading {
 impl Reader<'_> {
     fn run(&self, warnings: &mut Vec<String>) -> Vec<StiffnessFeature> {
         let n = self.brep.faces.len();
-        let free = |f: FaceId| !self.claimed.contains(&f);
-        let is_dep: Vec<bool> = (0..n)
-            .map(|f| free(f) && self.is_depression_face(f))
-            .collect();
+        let free = |f: FaceId| self.wall_face[f] == WallFace::None;
+        let is_dep: Vec<bool> = (0..n).map(|f| self.is_depression_face(f)).collect();
         // Connected sets over concave and tangent edges.
         let mut comp = vec![usize::MAX; n];
         let mut sets: Vec<Vec<FaceId>> = Vec::new();
@@ -141,7 +243,19 @@ impl Reader<'_> {
         let mut readings = Vec::new();
         let mut used = vec![false; n];
         for set in &sets {
+            if let Some(ambiguous) = self.between_walls(set) {
+                if ambiguous {
+                    self.warn_between_walls(set, warnings);
+                }
+                continue;
+            }
             for r in self.read_set(set) {
+                if let Some(ambiguous) = self.between_walls(&r.faces) {
+                    if ambiguous {
+                        self.warn_between_walls(&r.faces, warnings);
+                    }
+                    continue;
+                }
                 for &f in &r.faces {
                     used[f] = true;
                 }
@@ -166,6 +280,51 @@ impl Reader<'_> {
             ));
         }
         readings.into_iter().map(into_feature).collect()
+    }
+
+    /// A concave cylindrical corner blend (a fillet candidate): radius at
+    /// most the knowledge's limit, tangent to a neighbour, not a full turn.
+    fn is_blend(&self, f: FaceId) -> bool {
+        let fx = &self.facts[f];
+        matches!(fx.geom, FaceGeom::Cylinder { radius, .. } if radius <= self.k.max_fillet_radius)
+            && fx
+                .neighbours
+                .iter()
+                .any(|nb| nb.convexity == Convexity::Smooth && nb.face != f)
+            && !self.full_turn(&[f])
+    }
+
+    /// The wall-wins test: `Some(ambiguous)` when every face of `faces`
+    /// other than corner blends and walls' end faces is a face of a wall, and
+    /// at least one is (the space between walls,
+    /// not a depression); `ambiguous` when no web face is among them (no
+    /// floor a web provides: say so to the planner). `None`: a depression.
+    fn between_walls(&self, faces: &[FaceId]) -> Option<bool> {
+        let mut core = 0usize;
+        let mut web = false;
+        for &f in faces {
+            if self.is_blend(f) || self.wall_end[f] {
+                continue;
+            }
+            core += 1;
+            match self.wall_face[f] {
+                WallFace::None => return None,
+                WallFace::Web | WallFace::Both => web = true,
+                WallFace::Side => {}
+            }
+        }
+        (core > 0).then_some(!web)
+    }
+
+    fn warn_between_walls(&self, faces: &[FaceId], warnings: &mut Vec<String>) {
+        let read = self
+            .read_one(faces)
+            .map(|r| format!("{:?}", r.kind).to_lowercase())
+            .unwrap_or_else(|| "nothing".into());
+        warnings.push(format!(
+            "depressions: faces {faces:?} (readable as {read}) lie on the sides of walls with no web \
+             between them; read as the space between walls, not a depression (the wall wins)"
+        ));
     }
 
     /// A face that bounds removed material: not on the envelope.

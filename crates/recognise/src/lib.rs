@@ -1,15 +1,15 @@
 //! Stages 2 and 3: recognise stiffness features in the B-rep, in the set-up
 //! frame, and connect them.
 //!
-//! Walls are found first; when geometry can be read two ways (side notches
-//! versus a wall, thesis figure 5.8) the wall wins, so depressions are
-//! recognised on what the walls leave. Ids are assigned here, in a
-//! deterministic order, after both recognisers ran.
-
-use std::collections::BTreeSet;
+//! Walls are found first, then depressions on all faces: walls and
+//! depressions may share faces. When geometry can be read two ways (the
+//! space between ribs as pockets, thesis figure 5.8) the wall wins: a face
+//! set whose faces all belong to walls (apart from corner blends) is no
+//! depression (see `depressions`). Ids are assigned here, in a deterministic
+//! order, after both recognisers ran.
 
 use glam::DVec3;
-use thinplan_brep::{Brep, FaceId};
+use thinplan_brep::Brep;
 use thinplan_knowledge::{Knowledge, Machine};
 use thinplan_plan::{Connection, StiffnessFeature, StiffnessFeatureId};
 
@@ -35,18 +35,15 @@ pub fn recognise(brep: &Brep, up: DVec3, k: &Knowledge, machine: &Machine) -> Re
     let adjacency = thinplan_brep::edge_adjacency(brep);
     let mut warnings = Vec::new();
     let mut features = walls::find_walls(brep, &adjacency, up, &k.wall_recognition, &mut warnings);
-    let claimed: BTreeSet<FaceId> = features
-        .iter()
-        .flat_map(|f| f.faces.iter().copied())
-        .collect();
-    features.extend(depressions::find_depressions(
+    let depressions = depressions::find_depressions(
         brep,
         &adjacency,
         up,
         &k.depression_recognition,
-        &claimed,
+        &features,
         &mut warnings,
-    ));
+    );
+    features.extend(depressions);
     assign_ids(&mut features);
     for f in &mut features {
         f.access = accessibility::access_directions(brep, f, up, machine);

@@ -101,9 +101,10 @@ pub struct MfcadScore {
     pub per_class: BTreeMap<String, (usize, usize)>,
     /// (true class, predicted class) → faces.
     pub confusion: BTreeMap<(String, String), usize>,
-    /// Faces a wall claimed whose true class is not stock.
+    /// Faces a wall lists whose true class is not stock (they may also be
+    /// faces of a depression: walls and depressions share faces).
     pub wall_claimed_feature_faces: usize,
-    /// Faces walls claimed in all.
+    /// Faces walls list in all.
     pub wall_claimed_faces: usize,
     /// Parts that could not be read or scored, with the reason.
     pub errors: Vec<String>,
@@ -226,7 +227,7 @@ pub fn score_mfcad_with(
 }
 
 /// As [`score_mfcad_with`], but with the depression recogniser alone (no
-/// faces claimed by walls): the score of this module's rules.
+/// walls): the score of the depression rules.
 pub fn score_mfcad_depressions_with(
     dir: &Path,
     read: impl Fn(&Path) -> Result<thinplan_brep::Brep, String>,
@@ -301,18 +302,23 @@ fn score(
                 &adjacency,
                 DVec3::Z,
                 &k.depression_recognition,
-                &std::collections::BTreeSet::new(),
+                &[],
                 &mut Vec::new(),
             )
         };
         let mut predicted = vec!["stock".to_string(); brep.faces.len()];
         let mut wall = vec![false; brep.faces.len()];
+        // A face's class is the class of the depression or detail holding
+        // it, else stock (walls are stock; they may share faces with
+        // depressions).
         for f in &features {
-            let c = mfcad_class(f);
             for &face in &f.faces {
                 if face < predicted.len() {
-                    predicted[face] = c.clone();
-                    wall[face] = f.kind == StiffnessKind::Wall;
+                    if f.kind == StiffnessKind::Wall {
+                        wall[face] = true;
+                    } else {
+                        predicted[face] = mfcad_class(f);
+                    }
                 }
             }
         }

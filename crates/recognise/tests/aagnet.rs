@@ -11,8 +11,6 @@
 //! and steps whose curved sides are counted as corners; they map to the
 //! rectangular class of the same topology).
 
-use std::path::Path;
-
 use glam::DVec3;
 use thinplan_plan::{StiffnessFeature, StiffnessKind};
 use thinplan_recognise::mfcad::mfcad_class;
@@ -78,12 +76,10 @@ fn centroid(brep: &thinplan_brep::Brep, f: usize) -> DVec3 {
 
 #[test]
 fn aagnet_test_face_accuracy() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let data = root.join("../shared/data/aagnet");
-    if !data.is_dir() {
-        println!("skipped: {} is missing", data.display());
+    let root = thinplan_testdata::repo_root();
+    let Some(data) = thinplan_testdata::data_dir("aagnet") else {
         return;
-    }
+    };
     let brep = thinplan_step::read_step_file(&data.join("test.step"))
         .unwrap()
         .brep;
@@ -109,7 +105,7 @@ fn aagnet_test_face_accuracy() {
         &adjacency,
         DVec3::Z,
         &k.depression_recognition,
-        &Default::default(),
+        &[],
         &mut Vec::new(),
     );
     let ours: Vec<DVec3> = (0..brep.faces.len()).map(|f| centroid(&brep, f)).collect();

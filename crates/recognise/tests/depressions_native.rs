@@ -1,7 +1,5 @@
 //! Depressions on hand-built native parts.
 
-use std::collections::BTreeSet;
-
 use glam::DVec3;
 use thinplan_plan::{StiffnessFeature, StiffnessKind};
 
@@ -15,7 +13,7 @@ fn recognise(ron: &str) -> Vec<StiffnessFeature> {
         &adjacency,
         DVec3::Z,
         &k.depression_recognition,
-        &BTreeSet::new(),
+        &[],
         &mut Vec::new(),
     )
 }
@@ -74,6 +72,12 @@ fn block_with_through_step_and_slot() {
         .iter()
         .map(|x| (x.kind, x.provenance.rule.as_str()))
         .collect();
-    assert!(kinds.contains(&(StiffnessKind::Slot, "recognise.slot.through")), "{kinds:?}");
-    assert!(kinds.contains(&(StiffnessKind::Step, "recognise.step.through")), "{kinds:?}");
+    assert!(
+        kinds.contains(&(StiffnessKind::Slot, "recognise.slot.through")),
+        "{kinds:?}"
+    );
+    assert!(
+        kinds.contains(&(StiffnessKind::Step, "recognise.step.through")),
+        "{kinds:?}"
+    );
 }

@@ -6,13 +6,7 @@ use thinplan_brep::Brep;
 use thinplan_recognise::mfcad::{score_mfcad_depressions_with, score_mfcad_with, MfcadScore};
 
 fn data() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/mfcad");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        println!("skipped: {} is missing", dir.display());
-        None
-    }
+    thinplan_testdata::data_dir("mfcad")
 }
 
 fn read(p: &Path) -> Result<Brep, String> {
@@ -48,7 +42,7 @@ fn mfcad_depressions_face_accuracy() {
     assert_eq!(s.correct, s.faces);
 }
 
-/// The full orchestrator (walls first), up = +z.
+/// The full orchestrator (walls, then depressions on all faces), up = +z.
 #[test]
 fn mfcad_face_accuracy() {
     let Some(dir) = data() else { return };
@@ -56,7 +50,12 @@ fn mfcad_face_accuracy() {
     show(&s);
     assert!(s.errors.is_empty(), "{:?}", s.errors);
     assert_eq!(s.parts, 100);
-    // Below the depressions-alone 100 % only by the faces the wall
-    // recogniser claims (thin slabs between features read as walls).
-    assert!(s.overall() >= 0.89, "{}", s.overall());
+    // Walls and depressions share faces; a face scores as the depression
+    // holding it. 6 faces stay stock by "the wall wins": in 0-6-10-12-19 a
+    // through step whose floor is a web's face and whose side is a 1.26 mm
+    // flange's side (an L section: the space beside a wall on its web), and
+    // in 2-6-6-13-14-23 a rectangular passage whose four sides are all sides
+    // of thin walls (the bore of a square tube; reported as a warning).
+    assert_eq!(s.correct, 2231, "{}", s.overall());
+    assert_eq!(s.faces - s.correct, 6);
 }
