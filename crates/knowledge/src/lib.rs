@@ -18,12 +18,14 @@ pub mod recognition;
 pub mod resources;
 pub mod sequencing;
 pub mod sizing;
+pub mod strategies;
 
 pub use load::{load_ron, parse_ron, KnowledgeError};
 pub use recognition::*;
 pub use resources::*;
 pub use sequencing::*;
 pub use sizing::*;
+pub use strategies::*;
 
 /// All knowledge a plan uses, by id (ordered maps: deterministic).
 #[derive(Debug, Clone, PartialEq)]
@@ -42,14 +44,17 @@ pub struct Knowledge {
     pub depression_recognition: DepressionRecognition,
     /// Stiffness-feature sequencing rules (`sequencing.ron`).
     pub sequencing: SequencingKnowledge,
+    /// Machining-feature determination strategies (`strategies.ron`).
+    pub strategies: StrategyKnowledge,
 }
 
 /// Files at the knowledge root; each is required.
-pub const ROOT_FILES: [&str; 4] = [
+pub const ROOT_FILES: [&str; 5] = [
     SIZING_FILE,
     "recognition_walls.ron",
     "recognition_depressions.ron",
     SEQUENCING_FILE,
+    STRATEGIES_FILE,
 ];
 
 /// The embedded copy of the repository's `knowledge/` directory:
@@ -79,6 +84,10 @@ const BUILTIN: &[(&str, &str)] = &[
     (
         "sequencing.ron",
         include_str!("../../../knowledge/sequencing.ron"),
+    ),
+    (
+        "strategies.ron",
+        include_str!("../../../knowledge/strategies.ron"),
     ),
 ];
 
@@ -192,8 +201,15 @@ impl Knowledge {
             parse_root::<DepressionRecognition>(&root, ROOT_FILES[2], origin, &mut errors);
         let sequencing =
             parse_root::<SequencingKnowledge>(&root, SEQUENCING_FILE, origin, &mut errors);
-        let (Some(sizing), Some(wall_recognition), Some(depression_recognition), Some(sequencing)) =
-            (sizing, walls, depressions, sequencing)
+        let strategies =
+            parse_root::<StrategyKnowledge>(&root, STRATEGIES_FILE, origin, &mut errors);
+        let (
+            Some(sizing),
+            Some(wall_recognition),
+            Some(depression_recognition),
+            Some(sequencing),
+            Some(strategies),
+        ) = (sizing, walls, depressions, sequencing, strategies)
         else {
             return Err(errors);
         };
@@ -207,6 +223,7 @@ impl Knowledge {
                 wall_recognition,
                 depression_recognition,
                 sequencing,
+                strategies,
             }),
             errors,
         };
@@ -397,6 +414,9 @@ fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
     }
     for problem in k.sequencing.problems() {
         errors.push(invalid("sequencing knowledge (sequencing.ron)", problem));
+    }
+    for problem in k.strategies.problems() {
+        errors.push(invalid("strategy knowledge (strategies.ron)", problem));
     }
     for m in k.materials.values() {
         let what = format!("material `{}`", m.id);

@@ -1,0 +1,264 @@
+//! Machining-feature determination strategies (thesis §4.1, figure 4.13),
+//! read from `knowledge/strategies.ron`.
+//!
+//! A strategy is the knowledge set for one kind of stiffness feature (by
+//! wall role): an ordered list of building blocks that a knowledge engineer
+//! can reorder, reparameterise or drop (§4.1.4: "portions of knowledge
+//! should be expressed in such a way that they can be used as building
+//! blocks"). `thinplan-determine` runs the blocks of the strategy that
+//! matches a stiffness feature in order; each machining feature and
+//! constraint it makes carries `strategies.<block id>` as its provenance
+//! rule. This module is only the data and the checks on it.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// The name of the strategies file at the knowledge root.
+pub const STRATEGIES_FILE: &str = "strategies.ron";
+
+/// All strategies.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StrategyKnowledge {
+    pub strategies: Vec<Strategy>,
+}
+
+/// The knowledge set for the stiffness features of some roles.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Strategy {
+    /// Unique id.
+    pub id: String,
+    /// The wall roles this strategy applies to (each role in at most one
+    /// strategy).
+    pub roles: Vec<StrategyRole>,
+    /// The building blocks, run in this order.
+    pub blocks: Vec<Block>,
+    /// A sentence for explanations (e.g. the thesis section).
+    #[serde(default)]
+    pub note: String,
+}
+
+/// A wall role (the same names as the plan's `WallRole`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum StrategyRole {
+    Rib,
+    Flange,
+    Web,
+}
+
+/// One building block of a strategy.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Block {
+    /// Which side of a wall gets the large machining features (§4.1.3,
+    /// rules 1 and 2).
+    SideChoice(SideChoice),
+    /// The wall step approach (§4.1.1, figure 4.1) with the sizing model of
+    /// §4.1.2.
+    WallSteps(WallSteps),
+    /// A web face-milled top-down in layers.
+    WebFaceMill(WebFaceMill),
+}
+
+impl Block {
+    pub fn id(&self) -> &str {
+        match self {
+            Block::SideChoice(b) => &b.id,
+            Block::WallSteps(b) => &b.id,
+            Block::WebFaceMill(b) => &b.id,
+        }
+    }
+}
+
+/// Picks side A (the large features) by the first criterion that decides;
+/// when none does, side A is the side the wall's normal points to.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SideChoice {
+    pub id: String,
+    /// Tried in order; the first that tells the sides apart decides.
+    pub criteria: Vec<SideCriterion>,
+}
+
+/// One way of telling the sides of a wall apart.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum SideCriterion {
+    /// §4.1.3 rule 1: a horizontally oriented wall has its large features on
+    /// its up side. Decides when |normal · up| ≥ `min_cos_to_up`.
+    UpSide { min_cos_to_up: f64 },
+    /// §4.1.3 rule 2: the large features go on the side to which the most
+    /// other stiffness features are connected (that side is machined while
+    /// the other side still supports the wall). Decides when the counts
+    /// differ.
+    MostConnected,
+    /// Not in the thesis: the side with more material between the wall and
+    /// the blank boundary. Decides when the two differ by more than
+    /// `by_more_than` mm.
+    MostMaterial { by_more_than: f64 },
+}
+
+/// How a wall's features are finished (the sizing model's mode).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum StrategyMillingMode {
+    Peripheral,
+    Face,
+}
+
+/// The wall step approach: large features of height H on side A, small ones
+/// of height h on side B, all `width` wide, stacked from the top to the
+/// wall's foot and machined alternately top-down.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSteps {
+    pub id: String,
+    /// The sizing model's mode (§4.1.2, table 4.1).
+    pub mode: StrategyMillingMode,
+    /// How far the features reach away from the wall, in multiples of B_RF
+    /// (1.0: the features are B_RF wide; material beyond is left to the
+    /// remaining-material stage).
+    pub width_in_b_rf: f64,
+    /// Whether a feature's width is cut back to the blank boundary (a wall
+    /// on the blank's edge has nothing to remove on its outer side).
+    pub clip_to_blank: bool,
+    /// A side with less material than this (mm) between the wall and the
+    /// blank boundary has no features: the wall is machined from one side,
+    /// in small features of height h, top-down.
+    pub min_side_width: f64,
+    /// Walls whose normal is closer to `up` than this (|normal · up| above
+    /// it) are not stepped by this block (they are webs, not standing walls).
+    pub max_cos_to_up: f64,
+}
+
+/// A web face-milled top-down: the material above the web's up face, over
+/// its outline, in layers of `layer_depth`, the last ending on the web.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WebFaceMill {
+    pub id: String,
+    /// Depth of one layer along the spindle axis (mm).
+    pub layer_depth: f64,
+}
+
+impl StrategyKnowledge {
+    /// The strategy for a role, if any.
+    pub fn for_role(&self, role: StrategyRole) -> Option<&Strategy> {
+        self.strategies.iter().find(|s| s.roles.contains(&role))
+    }
+
+    /// Problems a parser cannot find: duplicate ids, roles in two
+    /// strategies, blocks in the wrong strategy or order, bad numbers.
+    pub fn problems(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut ids: BTreeMap<&str, ()> = BTreeMap::new();
+        let mut block_ids: BTreeMap<&str, &str> = BTreeMap::new();
+        let mut roles: BTreeMap<StrategyRole, &str> = BTreeMap::new();
+        for (i, s) in self.strategies.iter().enumerate() {
+            let name = if s.id.is_empty() {
+                out.push(format!("strategy #{} has an empty id", i + 1));
+                format!("#{}", i + 1)
+            } else {
+                format!("`{}`", s.id)
+            };
+            if !s.id.is_empty() && ids.insert(&s.id, ()).is_some() {
+                out.push(format!("strategy {name}: duplicate id"));
+            }
+            if s.roles.is_empty() {
+                out.push(format!("strategy {name}: applies to no role"));
+            }
+            for r in &s.roles {
+                if let Some(other) = roles.insert(*r, &s.id) {
+                    out.push(format!(
+                        "strategy {name}: role {r:?} already has strategy `{other}`"
+                    ));
+                }
+            }
+            let web = s.roles.contains(&StrategyRole::Web);
+            let standing = s.roles.iter().any(|r| *r != StrategyRole::Web);
+            let mut seen_steps = false;
+            for b in &s.blocks {
+                let bid = b.id();
+                if bid.is_empty() {
+                    out.push(format!("strategy {name}: a block has an empty id"));
+                } else if let Some(other) = block_ids.insert(bid, &s.id) {
+                    out.push(format!(
+                        "strategy {name}: block id `{bid}` is also used in strategy `{other}`"
+                    ));
+                }
+                match b {
+                    Block::SideChoice(c) => {
+                        if seen_steps {
+                            out.push(format!(
+                                "strategy {name}: side choice `{bid}` comes after the wall steps \
+                                 it should decide"
+                            ));
+                        }
+                        if c.criteria.is_empty() {
+                            out.push(format!("block `{bid}`: no criteria"));
+                        }
+                        for cr in &c.criteria {
+                            match cr {
+                                SideCriterion::UpSide { min_cos_to_up: v } => {
+                                    if !(v.is_finite() && (0.0..=1.0).contains(v)) {
+                                        out.push(format!(
+                                            "block `{bid}`: min_cos_to_up {v} is outside 0..=1"
+                                        ));
+                                    }
+                                }
+                                SideCriterion::MostConnected => {}
+                                SideCriterion::MostMaterial { by_more_than: v } => {
+                                    if !(v.is_finite() && *v >= 0.0) {
+                                        out.push(format!(
+                                            "block `{bid}`: by_more_than {v} must be ≥ 0"
+                                        ));
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    Block::WallSteps(w) => {
+                        seen_steps = true;
+                        if web {
+                            out.push(format!(
+                                "strategy {name}: wall steps `{bid}` cannot apply to webs"
+                            ));
+                        }
+                        if !(w.width_in_b_rf.is_finite() && w.width_in_b_rf > 0.0) {
+                            out.push(format!(
+                                "block `{bid}`: width_in_b_rf {} must be positive",
+                                w.width_in_b_rf
+                            ));
+                        }
+                        if !(w.min_side_width.is_finite() && w.min_side_width >= 0.0) {
+                            out.push(format!(
+                                "block `{bid}`: min_side_width {} must be ≥ 0",
+                                w.min_side_width
+                            ));
+                        }
+                        if !(w.max_cos_to_up.is_finite() && (0.0..1.0).contains(&w.max_cos_to_up)) {
+                            out.push(format!(
+                                "block `{bid}`: max_cos_to_up {} is outside 0..1",
+                                w.max_cos_to_up
+                            ));
+                        }
+                    }
+                    Block::WebFaceMill(f) => {
+                        if standing {
+                            out.push(format!(
+                                "strategy {name}: web face milling `{bid}` applies to webs only"
+                            ));
+                        }
+                        if !(f.layer_depth.is_finite() && f.layer_depth > 0.0) {
+                            out.push(format!(
+                                "block `{bid}`: layer_depth {} must be positive",
+                                f.layer_depth
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+}
