@@ -675,6 +675,15 @@ impl Reader<'_> {
             }
             _ => None,
         };
+        // A through opening with two parallel straight sides joined by two
+        // ends (round or straight), long for its width: a slot.
+        let elongation = if closed && !has_floor && diameter.is_none() {
+            self.elongation(&planes, &sides, curved, axis, &pts)
+        } else {
+            None
+        };
+        let opening_slot =
+            elongation.is_some_and(|(l, w)| l >= self.k.min_slot_length_to_width * w);
         use DepressionKind::*;
         let (kind, rule) = if diameter.is_some() {
             if has_floor {
@@ -685,6 +694,7 @@ impl Reader<'_> {
         } else if closed {
             match (has_floor, diameter.is_some()) {
                 (false, true) => (Hole, "recognise.hole.round"),
+                (false, false) if opening_slot => (Slot, "recognise.slot.opening"),
                 (false, false) => (Hole, "recognise.hole.passage"),
                 (true, true) => (Hole, "recognise.hole.blind"),
                 (true, false) => (Pocket, "recognise.pocket"),
@@ -761,6 +771,10 @@ impl Reader<'_> {
         if let Some(d) = diameter {
             values.push(("diameter", d));
         }
+        if let Some((l, w)) = elongation {
+            values.push(("opening_length", l));
+            values.push(("opening_width", w));
+        }
         Some(Reading {
             kind,
             rule,
@@ -772,6 +786,59 @@ impl Reader<'_> {
             length,
             diameter,
         })
+    }
+
+    /// `(length, width)` of a through opening whose outline is two parallel
+    /// straight sides joined by two ends: two planes facing each other plus
+    /// two curved ends (a stadium), or two pairs of facing planes (a
+    /// rectangle; the closer pair are the long sides). `planes` are the
+    /// distinct planes of the planar sides.
+    fn elongation(
+        &self,
+        planes: &[(DVec3, f64)],
+        sides: &[FaceId],
+        curved: usize,
+        axis: DVec3,
+        pts: &[DVec3],
+    ) -> Option<(f64, f64)> {
+        let facing = |a: usize, b: usize| planes[a].0.dot(planes[b].0) < -self.cos_tol;
+        // Distance between two facing planes n·x = d0 and −n·x = d1.
+        let gap = |a: usize, b: usize| (planes[a].1 + planes[b].1).abs();
+        let (long_a, width) = match (planes.len(), curved) {
+            (2, 2) => {
+                let ends_round = sides.iter().all(|&f| {
+                    matches!(
+                        self.facts[f].geom,
+                        FaceGeom::Plane { .. } | FaceGeom::Cylinder { .. }
+                    )
+                });
+                if !ends_round || !facing(0, 1) {
+                    return None;
+                }
+                (0, gap(0, 1))
+            }
+            (4, 0) => {
+                let partner = |a: usize| (0..4).find(|&b| b != a && facing(a, b));
+                let b = partner(0)?;
+                let rest: Vec<usize> = (1..4).filter(|&i| i != b).collect();
+                if !facing(rest[0], rest[1]) {
+                    return None;
+                }
+                let (g0, g1) = (gap(0, b), gap(rest[0], rest[1]));
+                if g0 <= g1 {
+                    (0, g0)
+                } else {
+                    (rest[0], g1)
+                }
+            }
+            _ => return None,
+        };
+        let dir = planes[long_a].0.cross(axis).try_normalize()?;
+        let (lo, hi) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            let t = p.dot(dir);
+            (lo.min(t), hi.max(t))
+        });
+        (width > 0.0 && hi > lo).then_some((hi - lo, width))
     }
 
     /// Whether curved faces together turn all the way round their axis

@@ -7,6 +7,7 @@
 //! |-------------------------------------------------------------------|-----------------------------|
 //! | `chamfer`                                                         | chamfer                     |
 //! | `hole` without floor, 3 / 4 / 6 profile sides                     | triangular / rectangular / 6sides_passage |
+//! | `slot.opening` (a long through opening: two parallel sides + ends) | rectangular_passage (by sides, as holes)  |
 //! | `pocket` (closed ring + floor), 3 / 4 / 6 sides                   | triangular / rectangular / 6sides_pocket  |
 //! | `slot.through` (floor, two facing sides)                          | rectangular_through_slot    |
 //! | `slot.v` (no floor, two inclined sides)                           | triangular_through_slot     |
@@ -195,6 +196,8 @@ pub fn mfcad_class(f: &StiffnessFeature) -> String {
         StiffnessKind::Hole => format!("{}_passage", shape_name(f)),
         StiffnessKind::Pocket => format!("{}_pocket", shape_name(f)),
         StiffnessKind::Slot => match rule {
+            // A long through opening (our slot) is a passage to MFCAD.
+            "recognise.slot.opening" => format!("{}_passage", shape_name(f)),
             "recognise.slot.v" => "triangular_through_slot".into(),
             "recognise.slot.blind" => "rectangular_blind_slot".into(),
             _ => "rectangular_through_slot".into(),

@@ -40,6 +40,12 @@ pub struct DepressionRecognition {
     /// (rectangular profiles, rectangular blind steps).
     #[serde(default = "default_right_angle_tolerance_deg")]
     pub right_angle_tolerance_deg: f64,
+    /// A through opening whose outline is two parallel straight sides joined
+    /// by two ends (round or straight) is a slot when its length (along the
+    /// sides) is at least this many times its width (between them); a
+    /// shorter one, or a round one, is a hole.
+    #[serde(default = "default_min_slot_length_to_width")]
+    pub min_slot_length_to_width: f64,
     /// The kinds to recognise, in priority order: when a face set can be read
     /// as two kinds (e.g. a narrow inclined face: chamfer or slanted step) the
     /// kind listed first wins; a kind left out is not recognised (its faces
@@ -58,6 +64,10 @@ fn default_min_chamfer_incline_deg() -> f64 {
 
 fn default_right_angle_tolerance_deg() -> f64 {
     1.0
+}
+
+fn default_min_slot_length_to_width() -> f64 {
+    2.0
 }
 
 fn default_priority() -> Vec<DepressionKind> {
