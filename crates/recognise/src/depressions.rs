@@ -834,10 +834,12 @@ impl Reader<'_> {
             _ => return None,
         };
         let dir = planes[long_a].0.cross(axis).try_normalize()?;
-        let (lo, hi) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            let t = p.dot(dir);
-            (lo.min(t), hi.max(t))
-        });
+        let (lo, hi) = pts
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                let t = p.dot(dir);
+                (lo.min(t), hi.max(t))
+            });
         (width > 0.0 && hi > lo).then_some((hi - lo, width))
     }
 
