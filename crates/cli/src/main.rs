@@ -571,7 +571,7 @@ fn plan(
         ProgressBar::hidden()
     } else {
         // Draws only when stderr is a terminal.
-        ProgressBar::new(4).with_style(
+        ProgressBar::new(5).with_style(
             ProgressStyle::with_template("{spinner} [{pos}/{len}] {msg}").expect("valid template"),
         )
     };
@@ -602,6 +602,16 @@ fn plan(
     progress.inc(1);
     progress.set_message("sequence");
     thinplan_sequence::run(&plan, &knowledge).apply_to(&mut plan);
+    progress.inc(1);
+    progress.set_message("determine machining features");
+    let determination =
+        thinplan_determine::determine(&plan, &brep, &knowledge).map_err(|e| CliError {
+            code: exit::INTERNAL,
+            kind: "determine",
+            message: e.to_string(),
+        })?;
+    warnings.extend(determination.warnings.iter().cloned());
+    determination.apply_to(&mut plan);
     progress.inc(1);
     progress.finish_and_clear();
 

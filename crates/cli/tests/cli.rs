@@ -302,3 +302,42 @@ fn recognize_finds_the_appendix_a_rib_and_draws_it() {
     assert_eq!(code, 3, "{w}");
     assert!(w["error"].as_str().unwrap().contains("setup.ron:1:"), "{w}");
 }
+
+#[test]
+fn every_sample_plans_through_determine_deterministically() {
+    let d = tmp("all-samples");
+    for (name, _) in thinplan_import::SAMPLES {
+        let a = d.join(format!("{name}.a.json"));
+        let b = d.join(format!("{name}.b.json"));
+        for out in [&a, &b] {
+            let (code, v) = run_json(
+                thinplan()
+                    .args(["plan", &format!("builtin:{name}"), "--json", "--out"])
+                    .arg(out),
+            );
+            assert_eq!(code, 0, "{name}: {v}");
+            let stages = v["stages_done"].as_array().unwrap();
+            assert!(stages.iter().any(|s| s == "determine"), "{name}: {v}");
+        }
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "{name}"
+        );
+        let plan = thinplan_plan::load(&a).unwrap();
+        // Every constraint refers to features that exist.
+        let sf: std::collections::BTreeSet<_> =
+            plan.stiffness_features.iter().map(|f| f.id).collect();
+        for c in &plan.stiffness_constraints {
+            assert!(sf.contains(&c.first) && sf.contains(&c.second), "{name}");
+        }
+        let mf: std::collections::BTreeSet<_> =
+            plan.machining_features.iter().map(|f| f.id).collect();
+        for c in &plan.machining_constraints {
+            assert!(mf.contains(&c.first) && mf.contains(&c.second), "{name}");
+        }
+        for f in &plan.machining_features {
+            assert!(sf.contains(&f.owner), "{name}: {} has no owner", f.id);
+        }
+    }
+}
