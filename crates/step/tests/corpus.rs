@@ -2,7 +2,6 @@
 
 mod common;
 
-
 use thinplan_step::{p21, read_step_file};
 
 fn check_dir(name: &str, expect_units: Option<&[&str]>) {
