@@ -83,7 +83,7 @@ fn main() {
             .filter(|f| f.kind == thinplan_plan::StiffnessKind::Wall)
             .count();
         assert_eq!(got, walls * cells, "every cell recognised the same");
-        // Phases: adjacency, walls, everything else.
+        // Phases: adjacency, walls, depressions, connections among walls.
         let t0 = std::time::Instant::now();
         let adj = thinplan_brep::edge_adjacency(&brep);
         let t_adj = t0.elapsed().as_secs_f64() * 1e3;
@@ -101,8 +101,18 @@ fn main() {
         let _ =
             thinplan_recognise::connect::connect(&brep, &adj, DVec3::Z, &ws, &k.wall_recognition);
         let t_conn = t2.elapsed().as_secs_f64() * 1e3;
+        let t3 = std::time::Instant::now();
+        let _ = thinplan_recognise::depressions::find_depressions(
+            &brep,
+            &adj,
+            DVec3::Z,
+            &k.depression_recognition,
+            &ws,
+            &mut w,
+        );
+        let t_dep = t3.elapsed().as_secs_f64() * 1e3;
         println!(
-            "{:>8} | {:>6} | {:>9} | {:>8.1} | {:>10.1} | adjacency {:.1} walls {:.1} connect(walls) {:.1}",
+            "{:>8} | {:>6} | {:>9} | {:>8.1} | {:>10.1} | adjacency {:.1} walls {:.1} depressions {:.1} connect(walls) {:.1}",
             brep.faces.len(),
             cells,
             r.features.len(),
@@ -110,6 +120,7 @@ fn main() {
             ms * 1e3 / brep.faces.len() as f64,
             t_adj,
             t_walls,
+            t_dep,
             t_conn
         );
     }

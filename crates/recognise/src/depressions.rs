@@ -51,6 +51,8 @@
 //! side–side corners are right angles), `min_corner_deg`, `slanted`,
 //! `depth`.
 
+use std::collections::BTreeMap;
+
 use glam::{DVec2, DVec3};
 use thinplan_brep::{Brep, Convexity, EdgeAdjacency, FaceId};
 use thinplan_knowledge::{DepressionKind, DepressionRecognition};
@@ -90,7 +92,26 @@ pub fn find_depressions(
         }
     }
     let wall_end = wall_ends(walls, &facts, &wall_face, k);
+    // Envelope directions (distinct) and planar faces by direction, sorted
+    // by offset: the per-face lookups stay logarithmic.
+    let mut hull_normals: Vec<DVec3> = Vec::new();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut planes: BTreeMap<[i64; 3], Vec<(f64, FaceId)>> = BTreeMap::new();
+    for (f, fx) in facts.iter().enumerate() {
+        if let FaceGeom::Plane { normal, origin } = fx.geom {
+            let key = geom::direction_key(normal);
+            if fx.hull && seen.insert(key) {
+                hull_normals.push(normal);
+            }
+            planes.entry(key).or_default().push((origin.dot(normal), f));
+        }
+    }
+    for list in planes.values_mut() {
+        list.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    }
     let r = Reader {
+        hull_normals,
+        planes,
         brep,
         facts: &facts,
         k,
@@ -103,6 +124,10 @@ pub fn find_depressions(
 }
 
 struct Reader<'a> {
+    /// The distinct normals of envelope faces.
+    hull_normals: Vec<DVec3>,
+    /// Planar faces by direction key, sorted by plane offset.
+    planes: BTreeMap<[i64; 3], Vec<(f64, FaceId)>>,
     brep: &'a Brep,
     facts: &'a [FaceFacts],
     k: &'a DepressionRecognition,
@@ -353,13 +378,23 @@ impl Reader<'_> {
 
     /// Whether the part has an envelope face with its normal along `a` (±).
     fn principal(&self, a: DVec3) -> bool {
-        self.facts.iter().any(|fx| {
-            fx.hull
-                && fx
-                    .geom
-                    .normal()
-                    .is_some_and(|n| n.dot(a).abs() > self.cos_tol)
-        })
+        self.hull_normals
+            .iter()
+            .any(|n| n.dot(a).abs() > self.cos_tol)
+    }
+
+    /// Whether another planar face lies in the plane of face `f` (normal
+    /// `n`): looked up among the faces of the same direction by offset.
+    fn coplanar_other(&self, f: FaceId, n: DVec3, origin: DVec3, tol: f64) -> bool {
+        let Some(list) = self.planes.get(&geom::direction_key(n)) else {
+            return false;
+        };
+        let d = origin.dot(n);
+        let start = list.partition_point(|(e, _)| *e < d - tol);
+        list[start..]
+            .iter()
+            .take_while(|(e, _)| *e <= d + tol)
+            .any(|(_, g)| *g != f)
     }
 
     /// Adjacent through a concave or tangent edge.
@@ -887,19 +922,6 @@ impl Reader<'_> {
         {
             return None;
         }
-        // A piece of a face split by a feature (coplanar with another face)
-        // is not a chamfer.
-        if let FaceGeom::Plane { origin, .. } = fx.geom {
-            let tol = self.k.distance_tolerance.max(1e-6) * 10.0;
-            let coplanar = self.facts.iter().enumerate().any(|(g, gx)| {
-                g != f
-                    && matches!(gx.geom, FaceGeom::Plane { normal, origin: o }
-                        if self.parallel(normal, n) && (o - origin).dot(n).abs() <= tol)
-            });
-            if coplanar {
-                return None;
-            }
-        }
         // The two longest straight edges.
         let mut edges: Vec<(f64, usize)> = fx
             .neighbours
@@ -957,6 +979,14 @@ impl Reader<'_> {
         };
         if width > limit {
             return None;
+        }
+        // A piece of a face split by a feature (coplanar with another face)
+        // is not a chamfer.
+        if let FaceGeom::Plane { origin, .. } = fx.geom {
+            let tol = self.k.distance_tolerance.max(1e-6) * 10.0;
+            if self.coplanar_other(f, n, origin, tol) {
+                return None;
+            }
         }
         Some(Reading {
             kind: DepressionKind::Chamfer,

@@ -867,18 +867,27 @@ fn merge_across_crossings(
             if !matches!(other.kind, PairKind::Planes) {
                 continue;
             }
-            for &c1 in on_this {
-                for &c2 in on_other {
-                    if c1 == c2 {
-                        continue;
-                    }
-                    // c1 beyond the plus plane, c2 below the minus plane.
-                    let r1 = cand_range(brep, &cands[c1], other.c);
-                    let r2 = cand_range(brep, &cands[c2], other.c);
-                    let ok = r1.0 >= other.s_plus - tol && r2.1 <= other.s_minus + tol;
-                    if ok {
-                        union(&mut parent, c1, c2);
-                    }
+            // c1 beyond the plus plane, c2 below the minus plane. The test
+            // is separable, so every such pair (c1 ≠ c2) is joined by
+            // joining all of them: the pairs of a complete bipartite graph
+            // less self-pairs connect all its nodes as soon as one pair
+            // exists. Linear in the lists (the panel's web pieces on one
+            // rib line are many).
+            let ok1: Vec<usize> = on_this
+                .iter()
+                .copied()
+                .filter(|&c| cand_range(brep, &cands[c], other.c).0 >= other.s_plus - tol)
+                .collect();
+            let ok2: Vec<usize> = on_other
+                .iter()
+                .copied()
+                .filter(|&c| cand_range(brep, &cands[c], other.c).1 <= other.s_minus + tol)
+                .collect();
+            let any_pair = ok1.iter().any(|&a| ok2.iter().any(|&b| a != b));
+            if any_pair {
+                let anchor = ok1[0];
+                for &c in ok1.iter().chain(ok2.iter()) {
+                    union(&mut parent, anchor, c);
                 }
             }
         }

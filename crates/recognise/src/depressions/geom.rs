@@ -1,6 +1,8 @@
 //! Face geometry the depression recogniser reasons on: outward normals,
 //! sampled boundaries, hull tests, 2D profiles in a feature frame.
 
+use std::collections::BTreeMap;
+
 use glam::{DVec2, DVec3};
 use thinplan_brep::{
     Brep, Convexity, EdgeAdjacency, EdgeId, FaceId, Frame, Surface, TessTolerance,
@@ -132,17 +134,29 @@ pub fn face_facts(brep: &Brep, adjacency: &[EdgeAdjacency], tol: f64) -> Vec<Fac
             hull: false,
         });
     }
-    // Hull test against every boundary point of the part.
+    // Hull test against every boundary point of the part: the support
+    // value max p·n over all points, computed once per distinct normal
+    // (parts share few plane directions; the web bottoms of a panel are one).
     let all: Vec<DVec3> = facts
         .iter()
         .flat_map(|x| x.points.iter().copied())
         .collect();
+    let mut support: BTreeMap<[i64; 3], f64> = BTreeMap::new();
     for fx in facts.iter_mut() {
         if let FaceGeom::Plane { normal, origin } = fx.geom {
-            fx.hull = all.iter().all(|p| (*p - origin).dot(normal) <= tol);
+            let h = *support
+                .entry(direction_key(normal))
+                .or_insert_with(|| all.iter().map(|p| p.dot(normal)).fold(f64::MIN, f64::max));
+            fx.hull = h - origin.dot(normal) <= tol;
         }
     }
     facts
+}
+
+/// A key for a unit direction, equal for directions within about 1e-9.
+pub fn direction_key(n: DVec3) -> [i64; 3] {
+    let q = |x: f64| (x * 1e9).round() as i64;
+    [q(n.x), q(n.y), q(n.z)]
 }
 
 /// Area magnitude of a closed 3D polyline (vector area).
