@@ -6,9 +6,10 @@
 //! All faces are read, also those of walls: walls and depressions may share
 //! faces (a slot beside a thin slab keeps the slab's side as its own side).
 //! "The wall wins" (thesis figure 5.8) is applied afterwards, precisely: a
-//! face set whose faces, apart from corner blends, all belong to walls (a
-//! web face as floor, wall sides as sides: the space between isogrid ribs,
-//! or between two ribs on a web) is the space between walls, not a
+//! face set whose faces, apart from corner blends and the end faces of
+//! standing walls, all belong to walls (a web face as floor, wall sides as
+//! sides: the space between isogrid ribs, or between two ribs on a web) is
+//! the space between walls, not a
 //! depression, and is dropped (with a warning only when it is ambiguous:
 //! no web face among them); its corner blends become fillet details. A set
 //! with at least one face no wall owns stays a depression.
@@ -29,8 +30,11 @@
 //! 4. **Topology and shape.** The sides (faces of the set other than
 //!    floors) form a closed ring around the axis or an open chain. Closed
 //!    with a floor: pocket; closed without: hole (round when its sides are
-//!    one cylinder, else a free-shaped passage). Open with a floor: one side
-//!    is a step (slanted when the side leans away from the floor), two
+//!    one cylinder, else a free-shaped passage; a passage with two parallel
+//!    straight sides joined by two ends, at least `min_slot_length_to_width`
+//!    times as long as wide, is a slot, `recognise.slot.opening`). Open
+//!    with a floor: one side is a step (slanted when the side leans away
+//!    from the floor), two
 //!    facing sides a slot, two sides meeting at a corner a blind step, three
 //!    or more a blind slot; open without a floor: two sides a V slot (or a
 //!    notch at a right angle), more a cut-out. The profile (the floor's
@@ -39,7 +43,14 @@
 //! 5. **Details.** A narrow planar face with convex edges, inclined to the
 //!    neighbours along its two long edges, is a chamfer; a cylindrical blend
 //!    (concave or convex, tangent to its neighbours, radius at most the
-//!    knowledge's limit) that no depression took is a fillet.
+//!    knowledge's limit) that no depression took is a fillet. Details are
+//!    read only on faces no wall lists.
+//!
+//! Cost: face facts, sets and readings are linear in the faces (sets are
+//! read in time quadratic in their own size); the envelope test computes
+//! the support value `max p·n` over the part's boundary points once per
+//! distinct plane direction, and coplanar lookups go through planes sorted
+//! by offset per direction.
 //!
 //! Nothing here depends on `up`: depressions are classified in their own
 //! frame (roles, which depend on the set-up, are for walls).
@@ -49,7 +60,7 @@
 //! sides), `curved_sides`, `floor` (0/1), `closed` (0/1), `profile_corners`
 //! (corners of the profile), `floor_corners`, `right_corners` (1 when all
 //! side–side corners are right angles), `min_corner_deg`, `slanted`,
-//! `depth`.
+//! `depth`, and for long through openings `opening_length`, `opening_width`.
 
 use std::collections::BTreeMap;
 

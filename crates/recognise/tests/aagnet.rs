@@ -148,8 +148,8 @@ fn aagnet_test_face_accuracy() {
         // 23/27: the four faces AAGNet labels rectangular_blind_step around
         // one floor read as a blind slot (a floor, two facing sides and an
         // end wall); see MFCAD.md.
-        if name == "depressions alone" {
-            assert!(correct >= 23, "{correct}");
-        }
+        // The full orchestrator reaches the same: walls share faces with
+        // depressions and a face scores as the depression holding it.
+        assert!(correct >= 23, "{name}: {correct}");
     }
 }
