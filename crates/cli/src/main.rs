@@ -152,6 +152,16 @@ enum Command {
     },
     /// Write a part (STEP, native or builtin:NAME) as a STEP AP214 file.
     ExportStep { part: String, out: PathBuf },
+    /// Score recognition against the MFCAD dataset's per-face labels and
+    /// print the per-class table (docs/CLI.md).
+    ScoreMfcad {
+        /// The MFCAD directory (`*.step` + `*.labels.json`); default: the
+        /// external test data (`THINPLAN_DATA`, `../shared/data`, `/work/shared/data`).
+        dir: Option<PathBuf>,
+        /// Score the depression recogniser alone (no walls).
+        #[arg(long)]
+        depressions_only: bool,
+    },
     /// List the bundled sample parts.
     Samples,
 }
@@ -243,6 +253,45 @@ fn run(command: Command) -> Result<(), CliError> {
                 message: error_chain(&e),
             })?;
             eprintln!("wrote {}", out.display());
+            Ok(())
+        }
+        Command::ScoreMfcad {
+            dir,
+            depressions_only,
+        } => {
+            let dir = dir
+                .or_else(|| {
+                    [
+                        std::env::var_os("THINPLAN_DATA").map(PathBuf::from),
+                        Some(PathBuf::from("../shared/data")),
+                        Some(PathBuf::from("/work/shared/data")),
+                    ]
+                    .into_iter()
+                    .flatten()
+                    .map(|d| d.join("mfcad"))
+                    .find(|d| d.is_dir())
+                })
+                .ok_or_else(|| CliError {
+                    code: exit::BAD_INPUT,
+                    kind: "input",
+                    message: "no MFCAD directory given and none found".into(),
+                })?;
+            let read = |p: &Path| {
+                thinplan_step::read_step_file(p)
+                    .map(|m| m.brep)
+                    .map_err(|e| e.to_string())
+            };
+            let score = if depressions_only {
+                thinplan_recognise::mfcad::score_mfcad_depressions_with(&dir, read)
+            } else {
+                thinplan_recognise::mfcad::score_mfcad_with(&dir, read)
+            };
+            for e in &score.errors {
+                eprintln!("error: {e}");
+            }
+            print!("{}", score.table());
+            print!("{}", score.confusion_table());
+            println!("overall face accuracy: {:.2} %", 100.0 * score.overall());
             Ok(())
         }
         Command::Samples => {

@@ -341,3 +341,22 @@ fn every_sample_plans_through_determine_deterministically() {
         }
     }
 }
+
+#[test]
+fn score_mfcad_prints_the_per_class_table() {
+    let Some(dir) = thinplan_testdata::data_dir("mfcad") else {
+        return;
+    };
+    let out = thinplan().arg("score-mfcad").arg(&dir).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    for class in ["stock", "chamfer", "rectangular_pocket", "6sides_passage"] {
+        assert!(text.contains(class), "{class} missing:\n{text}");
+    }
+    let overall = text
+        .lines()
+        .find_map(|l| l.strip_prefix("overall face accuracy: "))
+        .and_then(|l| l.trim_end_matches(" %").parse::<f64>().ok())
+        .unwrap();
+    assert!(overall >= 99.7, "{overall}");
+}
