@@ -170,6 +170,101 @@ impl AdaptivePeer {
     }
 }
 
+/// TOPP-RA peer (`tools/peers/toppra/`): the venv's python and `toppra_time.py`.
+#[derive(Debug, Clone)]
+pub struct ToppraPeer {
+    pub python: PathBuf,
+    pub script: PathBuf,
+}
+
+impl ToppraPeer {
+    /// The peer if `tools/peers/toppra/setup.sh` has been run (the venv at `$THINPLAN_VENV` or
+    /// `$HOME/.cache/thinplan-venv` has a python with toppra), else `None`.
+    pub fn detect() -> Option<ToppraPeer> {
+        let script = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../tools/peers/toppra/toppra_time.py");
+        let venv = std::env::var_os("THINPLAN_VENV")
+            .map(PathBuf::from)
+            .or_else(|| {
+                std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/thinplan-venv"))
+            })?;
+        let python = venv.join("bin/python");
+        let has_toppra = std::fs::read_dir(venv.join("lib"))
+            .ok()?
+            .filter_map(|e| e.ok())
+            .any(|e| e.path().join("site-packages/toppra").exists());
+        (script.exists() && python.exists() && has_toppra).then_some(ToppraPeer { python, script })
+    }
+
+    /// The limits both sides use for the ratio: the machine's per-axis limits only (TOPP-RA has
+    /// no centripetal cap, no feed cap and no corner stops).
+    pub fn limits(machine: &MachineLimits) -> MachineLimits {
+        MachineLimits {
+            a_centripetal: f64::INFINITY,
+            ..machine.clone()
+        }
+    }
+
+    /// TOPP-RA times (s) of several planar paths in one run of the script; `None` where TOPP-RA
+    /// failed on a path.
+    pub fn times(
+        &self,
+        paths: &[(String, Vec<DVec2>)],
+        limits: &MachineLimits,
+    ) -> Result<Vec<Option<f64>>, String> {
+        let input = serde_json::json!({
+            "paths": paths.iter().map(|(name, pts)| serde_json::json!({
+                "name": name,
+                "points": pts.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>(),
+                "v_max": limits.v_max,
+                "a_max": limits.a_max,
+            })).collect::<Vec<_>>()
+        });
+        let dir = std::env::temp_dir().join(format!("thinplan-toppra-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        let inp = dir.join("paths.json");
+        std::fs::write(&inp, input.to_string()).map_err(|e| e.to_string())?;
+        let out = std::process::Command::new(&self.python)
+            .arg(&self.script)
+            .arg(&inp)
+            .args(["--grid-factor", "4", "--min-grid", "2000"])
+            .output()
+            .map_err(|e| e.to_string())?;
+        let _ = std::fs::remove_dir_all(&dir);
+        if !out.status.success() {
+            return Err(String::from_utf8_lossy(&out.stderr).into_owned());
+        }
+        let v: serde_json::Value =
+            serde_json::from_slice(&out.stdout).map_err(|e| e.to_string())?;
+        let res = v["results"].as_array().ok_or("no results from toppra_time.py")?;
+        Ok(res.iter().map(|r| r["time"].as_f64()).collect())
+    }
+}
+
+/// The part of a pocket path TOPP-RA can time like we do: the roughing spiral up to the link to
+/// the finishing pass (that link is a corner stop, which TOPP-RA cannot model), cut before any
+/// junction turning more than the corner angle.
+pub fn toppra_comparable(path: &crate::PocketPath, corner_deg: f64) -> Vec<DVec2> {
+    let pts = &path.points[..path.finish_start.clamp(2, path.points.len())];
+    let cos_lim = corner_deg.to_radians().cos();
+    let mut out: Vec<DVec2> = vec![pts[0]];
+    for i in 1..pts.len() {
+        let p = pts[i];
+        if p.distance_squared(*out.last().unwrap()) < 1e-18 {
+            continue;
+        }
+        if out.len() >= 2 {
+            let a = (out[out.len() - 1] - out[out.len() - 2]).normalize();
+            let b = (p - out[out.len() - 1]).normalize();
+            if a.dot(b) < cos_lim {
+                break;
+            }
+        }
+        out.push(p);
+    }
+    out
+}
+
 /// Benchmark configuration.
 #[derive(Debug, Clone)]
 pub struct BenchConfig {
@@ -183,6 +278,11 @@ pub struct BenchConfig {
     pub pockets: Vec<String>,
     /// FreeCAD Adaptive peer, if available.
     pub adaptive: Option<AdaptivePeer>,
+    /// TOPP-RA peer, if available (fills `toppra_ratio`).
+    pub toppra: Option<ToppraPeer>,
+    /// Field and distance blend of the curvilinear paths (see [`PocketParams`]).
+    pub field: crate::Field,
+    pub distance_blend: f64,
 }
 
 impl Default for BenchConfig {
@@ -193,6 +293,19 @@ impl Default for BenchConfig {
             l_over_d: vec![0.5, 1.0, 2.0, 4.0, 10.0],
             pockets: Vec::new(),
             adaptive: AdaptivePeer::detect(),
+            toppra: ToppraPeer::detect(),
+            field: crate::Field::Poisson,
+            distance_blend: 0.0,
+        }
+    }
+}
+
+impl BenchConfig {
+    /// The set `thinplan bench pockets` runs: every bench pocket at L/D = 1, 4, 10, 40, 100.
+    pub fn cli() -> Self {
+        BenchConfig {
+            l_over_d: vec![1.0, 4.0, 10.0, 40.0, 100.0],
+            ..BenchConfig::default()
         }
     }
 }
@@ -247,13 +360,17 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
         .feed
         .unwrap_or(cfg.limits.v_max[0].min(cfg.limits.v_max[1]));
     let mut rows = Vec::new();
+    let tlim = ToppraPeer::limits(&cfg.limits);
+    let mut topp: Vec<(usize, String, Vec<DVec2>, f64)> = Vec::new();
     for &ld in &cfg.l_over_d {
         let l = ld * d;
         for bp in bench_family(l) {
             if !cfg.pockets.is_empty() && !cfg.pockets.contains(&bp.pocket.name) {
                 continue;
             }
-            let params = bench_params(&bp);
+            let mut params = bench_params(&bp);
+            params.field = cfg.field;
+            params.distance_blend = cfg.distance_blend;
             let off = offset_path(&bp.pocket, &params)?;
             let cur = curvilinear_path(&bp.pocket, &params)?;
             let t_off = time_path(&off.points, feed, &cfg.limits);
@@ -268,6 +385,18 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                     }
                 })
             });
+            if cfg.toppra.is_some() {
+                let sub = toppra_comparable(&cur, tlim.corner_angle_deg);
+                if sub.len() >= 4 {
+                    let ours = time_path(&sub, 1e6, &tlim).total_time;
+                    topp.push((
+                        rows.len(),
+                        format!("{} L/D={ld}", bp.pocket.name),
+                        sub,
+                        ours,
+                    ));
+                }
+            }
             rows.push(BenchRow {
                 pocket: bp.pocket.name.clone(),
                 l_over_d: ld,
@@ -291,6 +420,18 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
             });
         }
     }
+    if let (Some(peer), false) = (&cfg.toppra, topp.is_empty()) {
+        let paths: Vec<(String, Vec<DVec2>)> =
+            topp.iter().map(|(_, n, p, _)| (n.clone(), p.clone())).collect();
+        match peer.times(&paths, &tlim) {
+            Ok(times) => {
+                for ((row, _, _, ours), t) in topp.iter().zip(times) {
+                    rows[*row].toppra_ratio = t.filter(|t| *t > 0.0).map(|t| ours / t);
+                }
+            }
+            Err(e) => eprintln!("TOPP-RA peer failed: {e}"),
+        }
+    }
     Ok(rows)
 }
 
@@ -301,9 +442,9 @@ pub fn format_table(rows: &[BenchRow]) -> String {
     let _ =
         writeln!(
         s,
-        "{:<17} {:>5} {:>7} {:>6} {:>6} | {:>9} {:>7} | {:>9} {:>7} {:>15} | {:>9} {:>7} | {:>7}",
+        "{:<17} {:>5} {:>7} {:>6} {:>6} | {:>9} {:>7} | {:>9} {:>7} {:>15} | {:>9} {:>7} | {:>7} | {:>7}",
         "pocket", "L/D", "L mm", "tool", "step", "off mm", "off s", "curv mm", "curv s", "method",
-        "adapt mm", "adapt s", "save %"
+        "adapt mm", "adapt s", "save %", "TOPP-RA"
     );
     for r in rows {
         let (am, at) = match &r.adaptive {
@@ -312,7 +453,7 @@ pub fn format_table(rows: &[BenchRow]) -> String {
         };
         let _ = writeln!(
             s,
-            "{:<17} {:>5.1} {:>7.1} {:>6.2} {:>6.2} | {:>9.0} {:>7.2} | {:>9.0} {:>7.2} {:>15} | {:>9} {:>7} | {:>7.1}",
+            "{:<17} {:>5.1} {:>7.1} {:>6.2} {:>6.2} | {:>9.0} {:>7.2} | {:>9.0} {:>7.2} {:>15} | {:>9} {:>7} | {:>7.1} | {:>7}",
             r.pocket,
             r.l_over_d,
             r.size_mm,
@@ -325,7 +466,10 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.curvilinear.method,
             am,
             at,
-            r.saving_pct
+            r.saving_pct,
+            r.toppra_ratio
+                .map(|x| format!("{x:.4}"))
+                .unwrap_or_else(|| "-".into())
         );
     }
     s

@@ -19,6 +19,7 @@ pub mod contour;
 pub mod fem;
 pub mod geom;
 pub mod offset;
+pub mod profile;
 pub mod spiral;
 pub mod svg;
 pub mod timing;
@@ -30,6 +31,7 @@ use serde::{Deserialize, Serialize};
 pub use bench::{bench_pockets, BenchConfig, BenchRow};
 pub use fem::Field;
 pub use offset::offset_path;
+pub use profile::PocketProfile;
 pub use spiral::curvilinear_path;
 pub use svg::pocket_svg;
 
@@ -136,6 +138,12 @@ pub struct PocketParams {
     pub field: Field,
     /// Laplacian smoothing passes over the spiral (kept only if the gap stays ≤ stepover).
     pub smoothing_passes: usize,
+    /// Blend of the PDE field with the distance to the roughing boundary, α ∈ [0, 1]: the
+    /// contours are those of w = (1 − α)·u/max u + α·d/max d. 0 = the pure PDE field
+    /// (Bieterman); 1 = parallel offsets. Near the boundary the distance term evens out the
+    /// spacing of the contours (−Δu = 1's gradient is small at corners and pocket ends).
+    #[serde(default)]
+    pub distance_blend: f64,
 }
 
 impl PocketParams {
@@ -148,6 +156,7 @@ impl PocketParams {
             mesh_size: None,
             field: Field::Poisson,
             smoothing_passes: 4,
+            distance_blend: 0.0,
         }
     }
 
@@ -159,6 +168,11 @@ impl PocketParams {
         if !(self.stepover > 0.0 && self.stepover <= d) {
             return Err(PocketError::BadParams(
                 "stepover must be in (0, tool diameter]".into(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.distance_blend) {
+            return Err(PocketError::BadParams(
+                "distance blend must be in [0, 1]".into(),
             ));
         }
         if !(self.finish_stepover >= 0.0 && self.finish_stepover <= self.stepover) {

@@ -3,7 +3,7 @@
 use glam::DVec2;
 use std::f64::consts::TAU;
 
-use crate::contour::contour_loops;
+use crate::contour::EdgeTopology;
 use crate::fem::{self, Mesh, Solution};
 use crate::geom::{loop_gap, perimeter, signed_area, SegIndex};
 use crate::offset::{append_loop_from_nearest, offset_loops, offset_path, sample_level};
@@ -137,22 +137,52 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
         .unwrap_or(params.stepover / 3.0)
         .min(perimeter(&rough_loop) / 24.0);
     let mesh = Mesh::of_loop(&rough_loop, h)?;
-    let sol = fem::solve(&mesh, params.field)?;
+    let mut sol = fem::solve(&mesh, params.field)?;
+    if params.distance_blend > 0.0 {
+        blend_with_distance(&mesh, &mut sol, &rough_loop, params.distance_blend);
+    }
+    let topo = EdgeTopology::new(&mesh);
     let mut factor = 1.0;
-    let mut last = None;
-    for _ in 0..5 {
-        match attempt(params, &mesh, &sol, &rough_loop, &boundary, factor) {
+    let mut worst = 0.0;
+    for _ in 0..10 {
+        match attempt(params, &mesh, &topo, &sol, &rough_loop, &boundary, factor) {
             Attempt::Fallback(reason) => return fallback(reason),
             Attempt::Ok(p) => {
                 if p.max_gap <= params.stepover {
                     return Ok(*p);
                 }
-                last = Some(p);
-                factor *= 0.95;
+                worst = p.max_gap;
+                factor *= 0.93;
             }
         }
     }
-    Ok(*last.expect("at least one attempt"))
+    // never return a spiral whose measured gap exceeds the stepover
+    fallback(format!(
+        "spiral gap {worst:.4} stays above the stepover {:.4} after 10 attempts",
+        params.stepover
+    ))
+}
+
+/// Replace the normalised field u by w = (1 − α)·u + α·d/max d (d: distance of each mesh
+/// vertex to the roughing boundary, 0 on it), renormalised to max 1.
+fn blend_with_distance(mesh: &Mesh, sol: &mut Solution, rough_loop: &[DVec2], alpha: f64) {
+    let idx = SegIndex::new(&[rough_loop], true);
+    let d: Vec<f64> = mesh
+        .vertices
+        .iter()
+        .zip(&mesh.on_boundary)
+        .map(|(p, &b)| if b { 0.0 } else { idx.nearest(*p) })
+        .collect();
+    let dmax = d.iter().copied().fold(0.0, f64::max).max(1e-300);
+    let mut w: Vec<f64> = sol
+        .u
+        .iter()
+        .zip(&d)
+        .map(|(u, d)| (1.0 - alpha) * u + alpha * d / dmax)
+        .collect();
+    let wmax = w.iter().copied().fold(0.0, f64::max).max(1e-300);
+    w.iter_mut().for_each(|x| *x /= wmax);
+    sol.u = w;
 }
 
 /// Sample `f` on t ∈ [0, 1] at `n` even steps, bisecting any step longer than `step`.
@@ -194,6 +224,7 @@ fn sample_turn(f: impl Fn(f64) -> DVec2, n: usize, step: f64) -> Vec<DVec2> {
 /// roughing boundary is within `target` of the last contour. `Err` when no single loop fits.
 fn choose_levels(
     mesh: &Mesh,
+    topo: &EdgeTopology,
     sol: &Solution,
     rough_loop: &[DVec2],
     c: DVec2,
@@ -223,7 +254,7 @@ fn choose_levels(
         let mut best: Option<(f64, Vec<DVec2>)> = None;
         for _ in 0..40 {
             let mid = 0.5 * (lo + hi);
-            let mut l = contour_loops(mesh, &sol.u, mid);
+            let mut l = topo.loops(mesh, &sol.u, mid);
             let ok = if l.len() == 1 {
                 let lp = l.pop().unwrap();
                 let g = match out.last() {
@@ -262,6 +293,7 @@ fn choose_levels(
 fn attempt(
     params: &PocketParams,
     mesh: &Mesh,
+    topo: &EdgeTopology,
     sol: &Solution,
     rough_loop: &[DVec2],
     boundary: &[DVec2],
@@ -290,7 +322,7 @@ fn attempt(
     // --- levels, outward from the maximum: greedy with the target gap, then the smallest
     // target that needs no more contours (so the gaps come out even instead of leaving a thin
     // last orbit)
-    let Ok(first) = choose_levels(mesh, sol, rough_loop, c, target) else {
+    let Ok(first) = choose_levels(mesh, topo, sol, rough_loop, c, target) else {
         return Attempt::Fallback("no single contour within the stepover below the maximum".into());
     };
     let n0 = first.len();
@@ -298,7 +330,7 @@ fn attempt(
     let mut chosen = first;
     for _ in 0..6 {
         let mid = 0.5 * (lo + hi);
-        match choose_levels(mesh, sol, rough_loop, c, mid) {
+        match choose_levels(mesh, topo, sol, rough_loop, c, mid) {
             Ok(l) if l.len() <= n0 => {
                 hi = mid;
                 chosen = l;
