@@ -236,7 +236,9 @@ impl ToppraPeer {
         }
         let v: serde_json::Value =
             serde_json::from_slice(&out.stdout).map_err(|e| e.to_string())?;
-        let res = v["results"].as_array().ok_or("no results from toppra_time.py")?;
+        let res = v["results"]
+            .as_array()
+            .ok_or("no results from toppra_time.py")?;
         Ok(res.iter().map(|r| r["time"].as_f64()).collect())
     }
 }
@@ -248,8 +250,7 @@ pub fn toppra_comparable(path: &crate::PocketPath, corner_deg: f64) -> Vec<DVec2
     let pts = &path.points[..path.finish_start.clamp(2, path.points.len())];
     let cos_lim = corner_deg.to_radians().cos();
     let mut out: Vec<DVec2> = vec![pts[0]];
-    for i in 1..pts.len() {
-        let p = pts[i];
+    for &p in &pts[1..] {
         if p.distance_squared(*out.last().unwrap()) < 1e-18 {
             continue;
         }
@@ -421,8 +422,10 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
         }
     }
     if let (Some(peer), false) = (&cfg.toppra, topp.is_empty()) {
-        let paths: Vec<(String, Vec<DVec2>)> =
-            topp.iter().map(|(_, n, p, _)| (n.clone(), p.clone())).collect();
+        let paths: Vec<(String, Vec<DVec2>)> = topp
+            .iter()
+            .map(|(_, n, p, _)| (n.clone(), p.clone()))
+            .collect();
         match peer.times(&paths, &tlim) {
             Ok(times) => {
                 for ((row, _, _, ours), t) in topp.iter().zip(times) {

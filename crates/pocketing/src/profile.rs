@@ -57,13 +57,18 @@ pub struct PocketProfile {
 
 fn to_pline(vs: &[Vertex], what: &str) -> Result<Polyline<f64>, String> {
     if vs.len() < 2 {
-        return Err(format!("{what}: needs at least 2 vertices, has {}", vs.len()));
+        return Err(format!(
+            "{what}: needs at least 2 vertices, has {}",
+            vs.len()
+        ));
     }
     let mut pl = Polyline::new_closed();
     for (i, v) in vs.iter().enumerate() {
         let (x, y, b) = v.xyb();
         if !(x.is_finite() && y.is_finite() && b.is_finite()) || b.abs() > 1e3 {
-            return Err(format!("{what}: vertex {i} is not finite (or bulge out of range)"));
+            return Err(format!(
+                "{what}: vertex {i} is not finite (or bulge out of range)"
+            ));
         }
         pl.add(x, y, b);
     }
@@ -75,11 +80,11 @@ fn to_pline(vs: &[Vertex], what: &str) -> Result<Polyline<f64>, String> {
             pl.remove_last();
         }
     }
-    if pl.area().abs() < 1e-12 {
-        return Err(format!("{what}: zero area"));
-    }
     if pl.scan_for_self_intersect() {
         return Err(format!("{what}: the profile intersects itself"));
+    }
+    if pl.area().abs() < 1e-12 {
+        return Err(format!("{what}: zero area"));
     }
     Ok(pl)
 }
