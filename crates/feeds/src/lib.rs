@@ -6,8 +6,8 @@
 //!
 //! # Algorithm
 //!
-//! Bieterman's two-pass scheme (Bieterman & Sandstrom, Boeing), with arc length `s` as the
-//! independent variable and `u = v²` as the state, so that constant tangential acceleration
+//! A two-pass scheme (Bieterman & Sandstrom's setting, with TOPP-RA's backward controllable-set
+//! and greedy forward passes), with arc length `s` as the independent variable and `u = v²` as the state, so that constant tangential acceleration
 //! `a` is a straight line `du/ds = 2a`:
 //!
 //! 1. **Geometry.** Segment `i` runs from `points[i]` to `points[i+1]`; its unit direction
@@ -19,53 +19,51 @@
 //!    exceeds [`MachineLimits::corner_angle_deg`] is a **corner**: the speed there is 0 and
 //!    its curvature is not used (the kink is not a circle). The two path ends copy the
 //!    curvature of their neighbour (a sampled curve continues), and have speed 0.
-//! 2. **Speed caps.** Every segment gets a cruise cap `vc_i`, the least of: its feed cap; the
-//!    per-axis velocity limit along its direction, `min_k V_k/|d_ik|`; and at each of its two
-//!    end points `j` the centripetal cap `sqrt(A_c/κ_j)` and the per-axis acceleration
-//!    projected on the normal, `min_k sqrt(A_k/|c_jk|)`. A point's cap is the least cap of the
-//!    segments that meet there (0 at ends and corners). The normal cap guarantees that at
-//!    every admissible speed zero tangential acceleration is feasible, which is what makes the
-//!    two passes consistent (see below).
-//! 3. **Forward pass** (acceleration): `u_{i+1} = min(cap_{i+1}, u_i + 2·a⁺_i·Δs_i)`.
-//! 4. **Backward pass** (deceleration): `u_i = min(u_i, u_{i+1} + 2·a⁻_i·Δs_i)`.
-//! 5. **Time.** Within a segment the speed profile is the exact time-optimal one for constant
-//!    limits, `u(σ) = min(u_i + 2a⁺σ, vc_i², u_{i+1} + 2a⁻(Δs − σ))`: accelerate, cruise,
-//!    decelerate. Its time is summed in closed form (`Δt = 2d/(v_a + v_b)` for each constant
-//!    acceleration piece, which is also right when one of the speeds is 0, and `d/v` for the
-//!    cruise). When the segment never reaches its cruise cap this is the usual trapezoidal
-//!    rule `Δt = 2Δs/(v_i + v_{i+1})`. Long straight segments are thus timed exactly, however
-//!    coarse the point spacing.
+//! 2. **Speed caps.** Every point gets a cap on `u`: the feed caps and the per-axis velocity
+//!    limits `min_k V_k/|d_k|` of the segments that meet there, the centripetal cap
+//!    `A_c/κ_j`, and 0 at the ends and corners.
+//! 3. **Segment constraints.** Between two points `u` is linear in `s` (constant tangential
+//!    acceleration `a = (u_{i+1} − u_i)/2Δs`), and the segment requires `|a| ≤ min_k A_k/|d_k|`
+//!    and, on every axis, `|d_k·a + c_k·u| ≤ A_k` with the curvature of *either* end point at
+//!    *both* end speeds. These are linear in `(u_i, u_{i+1})`, and since they are linear in
+//!    `u` they then hold at every speed the segment passes through, for any curvature between
+//!    the two end points' (conservative by O(spacing), so the time decreases under
+//!    refinement). `(0, 0)` is always feasible.
+//! 4. **Backward pass** (controllable sets, as TOPP-RA): from `u_{n−1} = 0`, the largest `u_i`
+//!    for which some `u_{i+1}` in `[0, hi_{i+1}]` satisfies segment i's constraints — a
+//!    two-variable LP, solved in closed form by eliminating `u_{i+1}` (Fourier–Motzkin over
+//!    the ≤ 14 lower and upper bounds). Every controllable set is `[0, hi_i]`.
+//! 5. **Forward pass** (greedy): `u_0 = 0`, and `u_{i+1}` the largest value in
+//!    `[0, hi_{i+1}]` allowed by segment i's constraints at `u_i` (non-empty because
+//!    `u_i ≤ hi_i`). There is no cruise-feasible cap: the speed may exceed the speed at which
+//!    zero tangential acceleration is possible wherever accelerating (braking) unloads the
+//!    saturated axis, e.g. at arc exits and entries — the maximum-velocity curve is implied by
+//!    the constraints.
+//! 6. **Time.** Per segment, the least of the ramp time `2Δs/(v_i + v_{i+1})` and, where it is
+//!    feasible, the accelerate–cruise–decelerate profile
+//!    `u(σ) = min(u_i + 2a⁺σ, vc_i², u_{i+1} + 2a⁻(Δs − σ))`, with `vc_i²` the segment's cap
+//!    lowered to the cruise-feasible normal cap `min_k A_k/|c_jk|` (and `A_c/κ_j`) of both
+//!    ends, and `a⁺` (`a⁻`) the largest acceleration (deceleration) keeping every axis within
+//!    its limit with both end curvatures over the whole phase. Its time is summed in closed
+//!    form (`Δt = 2d/(v_a + v_b)` per constant-acceleration piece, `d/v` for the cruise).
+//!    Long straight segments are thus timed exactly, however coarse the point spacing.
 //!
 //! **Tangential acceleration (the choice the design leaves open).** The available tangential
-//! acceleration is *reduced by the normal acceleration already in use*, axis by axis: each
-//! axis sees `d_ik·a + c_jk·u`, and we require `|d_ik·a + c_jk·u| ≤ A_k` at both end points
-//! `j` of the segment, for every `u` the segment's acceleration (deceleration) phase passes
-//! through. The bound is linear in `u`, so it is solved in closed form per segment (no
-//! iteration): `a⁺` is the largest acceleration for which the constraint holds from `u_i` up
-//! to `min(vc_i², u_i + 2a⁺Δs)`; `a⁻` the same backwards from `u_{i+1}`. With no curvature
-//! this is `a = min_k A_k/|d_ik|`, and the tangential acceleration never exceeds that value
-//! even where the normal acceleration on an axis points against the tangential one and the
-//! coupled bound alone would allow more (the curvature is a three-point estimate; this keeps
-//! "tangential acceleration ≤ min_k A_k/|d_ik|" true on its own, at a cost of about 0.3 % on
-//! a circle against TOPP-RA, which does exploit it). The same coupling is what TOPP-RA's
-//! per-axis `JointAccelerationConstraint` models, and without it curved paths would break
-//! the axis limits. The centripetal cap `A_c` caps only the normal acceleration and does not
-//! take from the tangential budget.
+//! acceleration is *reduced by the normal acceleration already in use*, axis by axis, as in
+//! TOPP-RA's per-axis `JointAccelerationConstraint`; without it curved paths would break the
+//! axis limits. The tangential acceleration also never exceeds `min_k A_k/|d_k|` even where the
+//! normal acceleration on an axis points against it and the coupled bound alone would allow
+//! more (the curvature is a three-point estimate; this keeps "tangential ≤ min_k A_k/|d_k|"
+//! true on its own, at a cost of about 0.4 % on a circle against TOPP-RA, which does exploit
+//! it). The centripetal cap `A_c` caps only the normal acceleration and does not take from the
+//! tangential budget.
 //!
-//! Why the passes are consistent: zero tangential acceleration is feasible at every admissible
-//! speed (the normal cap of step 2), so a point lowered by the backward pass only turns its
-//! segments into deceleration, which the backward pass itself has checked; `a⁺` is
-//! recomputed from the final speed where the backward pass lowered a point.
+//! Known conservatism (measured against TOPP-RA, see the README): that tangential cap, and the
+//! curvature of both ends of a segment applied to the whole segment, which costs O(spacing).
 //!
-//! Known conservatism (measured against TOPP-RA, see the README): that same cap keeps the
-//! speed at or below the "cruise-feasible" speed everywhere, whereas the true optimum can be
-//! above it where accelerating out of (or braking into) a tight arc relieves the saturated
-//! axis; and the curvature of both ends of a segment is applied to the whole segment, which
-//! costs O(spacing).
-//!
-//! Cost: six linear passes over the points and one scratch allocation (besides the three
-//! output vectors); a few million points per second in release on the shared 2-core machine
-//! (see the README).
+//! Cost: five linear passes over the points (two of them solving a small LP per segment) and
+//! one scratch allocation besides the three output vectors; over a million points per second
+//! in release (see the README).
 //!
 //! # Conventions
 //!
@@ -209,13 +207,9 @@ struct Work {
     cap2: f64,
     /// Tangential acceleration limit of segment i alone, `min_k A_k/|d_ik|`.
     a_tan: f64,
-    /// Acceleration of segment i from the forward pass (valid while u_i is unchanged).
-    a_fwd: f64,
-    /// Deceleration of segment i from the backward pass.
-    b_bwd: f64,
 }
 
-/// Time-optimal feed schedule along a polyline (Bieterman's two-pass algorithm; see the crate
+/// Time-optimal feed schedule along a polyline (two passes, O(n); see the crate
 /// documentation for the exact motion model).
 ///
 /// `feed_cap[i]` caps the speed on the segment from `points[i]` to `points[i+1]` (mm/s).
@@ -256,8 +250,6 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
         c: DVec3::ZERO,
         cap2: f64::INFINITY,
         a_tan: f64::INFINITY,
-        a_fwd: 0.0,
-        b_bwd: 0.0,
     };
     let mut w = vec![zero; n];
 
@@ -326,17 +318,20 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
         w[n - 1].c = w[n - 2].c;
     }
 
-    // Pass 3: segment cruise caps and point caps.
+    // Pass 3: segment caps and point caps. `seg2` (feed and per-axis velocity) caps the speed
+    // at both end points; `vc2` adds the cruise-feasible normal cap and is used only for the
+    // accelerate–cruise–decelerate profile inside a segment.
     let inv_v: [f64; 3] = std::array::from_fn(|k| 1.0 / limits.v_max[k]);
     for i in 0..n - 1 {
         let wi = w[i];
+        let mut seg2 = wi.vc2;
         if wi.len > 0.0 {
-            let mut vc2 = wi.vc2;
             // Per-axis velocity along the segment: v·|d_k| ≤ V_k.
             let r = (wi.d.x.abs() * inv_v[0])
                 .max(wi.d.y.abs() * inv_v[1])
                 .max(wi.d.z.abs() * inv_v[2]);
-            vc2 = vc2.min(1.0 / (r * r));
+            seg2 = seg2.min(1.0 / (r * r));
+            let mut vc2 = seg2;
             for c in [wi.c, w[i + 1].c] {
                 vc2 = vc2.min(normal_cap2(c, limits));
             }
@@ -346,40 +341,42 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
                 .map(|k| limits.a_max[k] / wi.d[k].abs())
                 .fold(f64::INFINITY, f64::min);
         }
-        let vc2 = w[i].vc2;
-        w[i].cap2 = w[i].cap2.min(vc2);
-        w[i + 1].cap2 = w[i + 1].cap2.min(vc2);
+        w[i].cap2 = w[i].cap2.min(seg2);
+        w[i + 1].cap2 = w[i + 1].cap2.min(seg2);
+    }
+    for wj in w.iter_mut() {
+        let kappa = wj.c.length();
+        if kappa > 0.0 {
+            wj.cap2 = wj.cap2.min(limits.a_centripetal / kappa);
+        }
     }
 
-    // Pass 4: forward (acceleration).
-    u.push(0.0);
-    for i in 0..n - 1 {
-        let ui = u[i];
-        let next = if w[i].len > 0.0 {
-            let a = accel_bound(ui, &w[i], &w[i + 1].c, 1.0, limits);
-            w[i].a_fwd = a;
-            ui + 2.0 * a * w[i].len
-        } else {
-            ui
-        };
-        u.push(next.min(w[i + 1].cap2));
-    }
-    // Pass 5: backward (deceleration).
-    // A point lowered here gets its forward acceleration recomputed in the time pass
-    // (a_fwd = NaN marks it).
+    // Pass 4 (backward): controllable sets. `u[i]` holds the largest u_i from which the end
+    // can still be reached at rest; every such set is [0, u_i] since (0, 0) is feasible on
+    // every segment.
+    u.resize(n, 0.0);
+    u[n - 1] = 0.0;
     for i in (0..n - 1).rev() {
-        let un = u[i + 1];
-        let lim = if w[i].len > 0.0 {
-            let b = accel_bound(un, &w[i], &w[i + 1].c, -1.0, limits);
-            w[i].b_bwd = b;
-            un + 2.0 * b * w[i].len
+        let hi = u[i + 1];
+        let x = if w[i].len > 0.0 {
+            let (cons, m) = segment_constraints(&w[i], &w[i + 1].c, limits);
+            max_start(&cons[..m], hi, w[i].cap2)
         } else {
-            un
+            hi
         };
-        if lim < u[i] {
-            u[i] = lim;
-            w[i].a_fwd = f64::NAN;
-        }
+        u[i] = x.min(w[i].cap2).max(0.0);
+    }
+    // Pass 5 (forward): greedy, the largest u_{i+1} in its controllable set reachable from u_i.
+    u[0] = 0.0;
+    for i in 0..n - 1 {
+        let hi = u[i + 1];
+        let y = if w[i].len > 0.0 {
+            let (cons, m) = segment_constraints(&w[i], &w[i + 1].c, limits);
+            max_end(&cons[..m], u[i], hi)
+        } else {
+            u[i].min(hi)
+        };
+        u[i + 1] = y.max(0.0);
     }
 
     // Pass 6: time, speeds.
@@ -388,19 +385,12 @@ pub fn schedule_polyline(points: &[DVec3], feed_cap: &[f64], limits: &MachineLim
     for i in 0..n - 1 {
         let wi = &w[i];
         if wi.len > 0.0 {
-            let a = if wi.a_fwd.is_nan() {
-                accel_bound(u[i], wi, &w[i + 1].c, 1.0, limits)
-            } else {
-                wi.a_fwd
-            };
-            let b = wi.b_bwd;
-            time += segment_time(u[i], u[i + 1], wi.vc2, a, b, wi.len);
+            time += segment_time_any(u[i], u[i + 1], wi, &w[i + 1].c, limits);
         }
         t.push(time);
         u[i] = u[i].max(0.0).sqrt();
     }
     u[n - 1] = u[n - 1].max(0.0).sqrt();
-
     Schedule {
         s,
         v: u,
@@ -478,6 +468,110 @@ fn accel_bound(u0: f64, w: &Work, c_far: &DVec3, dir: f64, limits: &MachineLimit
         // The phase reaches the cruise cap: the constraint is needed only up to vc².
         ((vc2 - u0) / (2.0 * ds)).max(a_cap).max(0.0)
     }
+}
+
+/// Linear constraints `α·u_i + β·u_{i+1} ≤ γ` on segment `w` (from point i to i+1) for a
+/// constant tangential acceleration `a = (u_{i+1} − u_i)/2Δs` (`u` linear in `s`):
+/// `|a| ≤ min_k A_k/|d_k|`, and on every axis `|d_k·a + c_k·u| ≤ A_k` with the curvature of
+/// either end point at both end speeds, hence (linear in `u`) at every speed the segment passes
+/// through, with any curvature between the two.
+#[inline]
+fn segment_constraints(
+    w: &Work,
+    c_far: &DVec3,
+    limits: &MachineLimits,
+) -> ([(f64, f64, f64); 26], usize) {
+    let mut out = [(0.0, 0.0, 0.0); 26];
+    let mut m = 0;
+    let l2 = 2.0 * w.len;
+    if w.a_tan.is_finite() {
+        out[0] = (-1.0, 1.0, l2 * w.a_tan);
+        out[1] = (1.0, -1.0, l2 * w.a_tan);
+        m = 2;
+    }
+    for k in 0..3 {
+        let ak = limits.a_max[k];
+        let q = w.d[k] / l2;
+        let (c0, c1) = (w.c[k], c_far[k]);
+        for (j, c) in [c0, c1].into_iter().enumerate() {
+            if c == 0.0 || (j == 1 && c == c0) {
+                continue; // no coupling (only |a| ≤ a_tan), or already there
+            }
+            // At u_i: (c − q)·x + q·y; at u_{i+1}: −q·x + (q + c)·y; both within ±A_k.
+            out[m] = (c - q, q, ak);
+            out[m + 1] = (q - c, -q, ak);
+            out[m + 2] = (-q, q + c, ak);
+            out[m + 3] = (q, -(q + c), ak);
+            m += 4;
+        }
+    }
+    (out, m)
+}
+
+/// Largest `x ≤ x_cap` for which some `y` in `[0, y_hi]` satisfies all the constraints
+/// (Fourier–Motzkin elimination of `y`). `(0, 0)` is always feasible, so the feasible `x`
+/// form the interval `[0, result]`.
+#[inline]
+fn max_start(cons: &[(f64, f64, f64)], y_hi: f64, x_cap: f64) -> f64 {
+    let mut x_max = x_cap;
+    let mut up = [(0.0, 1.0, y_hi); 27];
+    let mut lo = [(0.0, -1.0, 0.0); 27];
+    let (mut nu, mut nl) = (1, 1);
+    for &(a, b, g) in cons {
+        if b > 0.0 {
+            up[nu] = (a, b, g);
+            nu += 1;
+        } else if b < 0.0 {
+            lo[nl] = (a, b, g);
+            nl += 1;
+        } else if a > 0.0 {
+            x_max = x_max.min(g / a);
+        }
+    }
+    for &(ap, bp, gp) in &lo[..nl] {
+        for &(aq, bq, gq) in &up[..nu] {
+            // bq·(p) − bp·(q): (ap·bq − aq·bp)·x ≤ gp·bq − gq·bp.
+            let d = ap * bq - aq * bp;
+            if d > 0.0 {
+                x_max = x_max.min((gp * bq - gq * bp) / d);
+            }
+        }
+    }
+    x_max.max(0.0)
+}
+
+/// Largest `y ≤ y_hi` allowed by the constraints at `x` (the greedy forward step).
+#[inline]
+fn max_end(cons: &[(f64, f64, f64)], x: f64, y_hi: f64) -> f64 {
+    let mut y = y_hi;
+    for &(a, b, g) in cons {
+        if b > 0.0 {
+            y = y.min((g - a * x) / b);
+        }
+    }
+    y
+}
+
+/// Time over segment `w` between end speeds² `u0` and `u1`: the constant-acceleration ramp
+/// (`u` linear in `s`, which the segment constraints make feasible), or the
+/// accelerate–cruise–decelerate profile when it is feasible and faster.
+#[inline]
+fn segment_time_any(u0: f64, u1: f64, w: &Work, c_far: &DVec3, limits: &MachineLimits) -> f64 {
+    let (v0, v1) = (u0.sqrt(), u1.sqrt());
+    let mut t = if v0 + v1 > 0.0 {
+        2.0 * w.len / (v0 + v1)
+    } else {
+        f64::INFINITY
+    };
+    if u0 <= w.vc2 && u1 <= w.vc2 {
+        let a = accel_bound(u0, w, c_far, 1.0, limits);
+        let b = accel_bound(u1, w, c_far, -1.0, limits);
+        let slack = 1.0 + 1e-12;
+        if u1 <= (u0 + 2.0 * a * w.len) * slack && u0 <= (u1 + 2.0 * b * w.len) * slack {
+            t = t.min(segment_time(u0, u1, w.vc2, a, b, w.len));
+        }
+    }
+    t
 }
 
 /// Time over a segment of length `ds` with end speeds² `u0`, `u1`, cruise cap² `vc2`,
