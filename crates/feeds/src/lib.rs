@@ -7,8 +7,8 @@
 //! # Algorithm
 //!
 //! A two-pass scheme (Bieterman & Sandstrom's setting, with TOPP-RA's backward controllable-set
-//! and greedy forward passes), with arc length `s` as the independent variable and `u = v²` as the state, so that constant tangential acceleration
-//! `a` is a straight line `du/ds = 2a`:
+//! and greedy forward passes), with arc length `s` as the independent variable and `u = v²`
+//! as the state, so that constant tangential acceleration `a` is a straight line `du/ds = 2a`:
 //!
 //! 1. **Geometry.** Segment `i` runs from `points[i]` to `points[i+1]`; its unit direction
 //!    `d_i` is the tangent along it. At every interior point the curvature vector
