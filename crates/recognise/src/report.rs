@@ -162,16 +162,34 @@ pub fn to_svg(r: &Recognition, brep: &Brep) -> String {
 
     // Triangles facing the viewer, painter-sorted by depth.
     let mut tris: Vec<(f64, usize, [DVec2; 3], f64)> = Vec::new();
+    let max_edge = diag / 25.0;
     for (ti, t) in mesh.triangles.iter().enumerate() {
         let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
         let n = (b - a).cross(c - a);
         if n.dot(view) >= 0.0 {
             continue;
         }
-        let depth = ((a + b + c) / 3.0).dot(view);
         let shade = 0.55 + 0.45 * (-n.normalize().dot(view)).clamp(0.0, 1.0);
-        tris.push((depth, ti, [proj(a), proj(b), proj(c)], shade));
+        // Long triangles (fans across a web) defeat painter's sorting by
+        // centroid; split them until no edge exceeds a fraction of the part.
+        let mut stack = vec![([a, b, c], 0u32)];
+        while let Some(([a, b, c], level)) = stack.pop() {
+            let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+            if longest > max_edge && level < 4 {
+                let (ab, bc, ca) = ((a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0);
+                stack.extend([
+                    ([a, ab, ca], level + 1),
+                    ([ab, b, bc], level + 1),
+                    ([ca, bc, c], level + 1),
+                    ([ab, bc, ca], level + 1),
+                ]);
+                continue;
+            }
+            let depth = ((a + b + c) / 3.0).dot(view);
+            tris.push((depth, ti, [proj(a), proj(b), proj(c)], shade));
+        }
     }
+    // Stable for equal keys, so sub-triangles keep their push order.
     tris.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
 
     let mut lo = DVec2::splat(f64::INFINITY);
