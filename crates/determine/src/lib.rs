@@ -557,20 +557,31 @@ fn wall_steps(
             bottom_adjacency: Adjacency::Product,
             provenance: prov,
         });
-        if let Some(&prev) = chain.last() {
-            let mut p = values(Provenance::new(ProvenanceSource::Knowledge, rule.clone()));
-            p.note = format!("{}: figure 4.1 order, alternating sides top-down", sf.id);
-            out.constraints.push(Constraint {
-                first: prev,
-                second: id,
-                kind: ConstraintKind::Before,
-                priority: 0,
-                provenance: p,
-            });
-        }
-        chain.push(id);
+        let mut p = values(Provenance::new(ProvenanceSource::Knowledge, rule.clone()));
+        p.note = format!("{}: figure 4.1 order, alternating sides top-down", sf.id);
+        extend_chain(out, &mut chain, id, p);
     }
     chain
+}
+
+/// Appends `id` to a wall's or web's machining order: after the chain's last
+/// feature, with `provenance` on the constraint.
+fn extend_chain(
+    out: &mut Determination,
+    chain: &mut Vec<MachiningFeatureId>,
+    id: MachiningFeatureId,
+    provenance: Provenance,
+) {
+    if let Some(&prev) = chain.last() {
+        out.constraints.push(Constraint {
+            first: prev,
+            second: id,
+            kind: ConstraintKind::Before,
+            priority: 0,
+            provenance,
+        });
+    }
+    chain.push(id);
 }
 
 /// Stiffness constraints carried over to the owners' machining features.

@@ -12,8 +12,8 @@
 use glam::DVec3;
 use thinplan_knowledge::WebFaceMill;
 use thinplan_plan::{
-    Adjacency, Constraint, ConstraintKind, MachiningFeature, MachiningFeatureId, Prism, PrismFrame,
-    ProfileLoop, ProfileVertex, Provenance, ProvenanceSource, Region, StiffnessFeature,
+    Adjacency, MachiningFeature, MachiningFeatureId, Prism, PrismFrame, ProfileLoop, ProfileVertex,
+    Provenance, ProvenanceSource, Region, StiffnessFeature,
 };
 
 use crate::{area2, prism_points, span, Ctx, Determination, WallGeom, EPS, RULE_PREFIX};
@@ -138,19 +138,10 @@ pub(crate) fn face_mill(
             },
             provenance: prov,
         });
-        if let Some(&prev) = chain.last() {
-            let mut p = Provenance::new(ProvenanceSource::Knowledge, rule.clone())
-                .with_value("layer_depth", b.layer_depth);
-            p.note = format!("{}: face-milling layers top-down", sf.id);
-            out.constraints.push(Constraint {
-                first: prev,
-                second: id,
-                kind: ConstraintKind::Before,
-                priority: 0,
-                provenance: p,
-            });
-        }
-        chain.push(id);
+        let mut p = Provenance::new(ProvenanceSource::Knowledge, rule.clone())
+            .with_value("layer_depth", b.layer_depth);
+        p.note = format!("{}: face-milling layers top-down", sf.id);
+        crate::extend_chain(out, &mut chain, id, p);
     }
     chain
 }
