@@ -9,9 +9,10 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
-use thinplan_import::{ImportError, ImportedPart};
+use thinplan_import::ImportError;
 use thinplan_knowledge::Knowledge;
-use thinplan_plan::{Plan, Provenance, ProvenanceSource, Setup, Stage};
+use thinplan_pipeline::{ErrorKind, PipelineError, Session};
+use thinplan_plan::Setup;
 
 mod pocket_cmd;
 
@@ -336,6 +337,22 @@ impl From<ImportError> for CliError {
     }
 }
 
+impl From<PipelineError> for CliError {
+    fn from(e: PipelineError) -> Self {
+        let (code, kind) = match e.kind {
+            ErrorKind::Input => (exit::BAD_INPUT, "input"),
+            ErrorKind::Knowledge => (exit::KNOWLEDGE, "knowledge"),
+            ErrorKind::Setup => (exit::KNOWLEDGE, "setup"),
+            ErrorKind::Stage | ErrorKind::Cancelled => (exit::INTERNAL, "stage"),
+        };
+        CliError {
+            code,
+            kind,
+            message: e.message,
+        }
+    }
+}
+
 fn error_chain(e: &dyn std::error::Error) -> String {
     let mut s = e.to_string();
     let mut src = e.source();
@@ -395,25 +412,6 @@ fn inspect(part: &str, json: bool) -> Result<(), CliError> {
     Ok(())
 }
 
-fn parse_up(up: &str) -> Result<glam::DVec3, CliError> {
-    let bad = || CliError {
-        code: exit::BAD_INPUT,
-        kind: "input",
-        message: format!("--up `{up}`: expected three numbers x,y,z, not all zero"),
-    };
-    let v: Vec<f64> = up
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
-        return Err(bad());
-    }
-    glam::DVec3::new(v[0], v[1], v[2])
-        .try_normalize()
-        .ok_or_else(bad)
-}
-
 #[derive(Serialize)]
 struct PlanReport<'a> {
     part: &'a str,
@@ -431,36 +429,8 @@ struct PlanReport<'a> {
     warnings: &'a [String],
 }
 
-struct ResolvedSetup {
-    machine: String,
-    tools: String,
-    material: String,
-}
-
-/// A set-up file: every field optional.
-#[derive(serde::Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-struct SetupFile {
-    up: Option<(f64, f64, f64)>,
-    machine: Option<String>,
-    tool_set: Option<String>,
-    material: Option<String>,
-}
-
 fn load_knowledge(dir: Option<&Path>) -> Result<Knowledge, CliError> {
-    let result = match dir {
-        Some(d) => Knowledge::load_dir(d),
-        None => Knowledge::builtin(),
-    };
-    result.map_err(|errors| CliError {
-        code: exit::KNOWLEDGE,
-        kind: "knowledge",
-        message: errors
-            .iter()
-            .map(|e| e.to_string())
-            .collect::<Vec<_>>()
-            .join("\n"),
-    })
+    Ok(thinplan_pipeline::load_knowledge(dir)?)
 }
 
 fn check_knowledge(dir: Option<&Path>, json: bool) -> Result<(), CliError> {
@@ -508,102 +478,20 @@ fn check_knowledge(dir: Option<&Path>, json: bool) -> Result<(), CliError> {
     }
 }
 
-/// Checks the set-up against the knowledge: the resources exist and the
-/// machine can reach the spindle direction.
+/// The set-up the options ask for, checked against the knowledge.
 fn make_setup(opts: &SetupOpts, k: &Knowledge) -> Result<Setup, CliError> {
-    let file: SetupFile = match &opts.setup {
-        Some(path) => thinplan_knowledge::load_ron(path).map_err(|e| CliError {
-            code: exit::BAD_INPUT,
-            kind: "input",
-            message: e.to_string(),
-        })?,
-        None => SetupFile::default(),
+    let req = thinplan_pipeline::SetupRequest {
+        setup_file: opts.setup.clone(),
+        up: opts
+            .up
+            .as_deref()
+            .map(thinplan_pipeline::parse_up)
+            .transpose()?,
+        machine: opts.machine.clone(),
+        tool_set: opts.tools.clone(),
+        material: opts.material.clone(),
     };
-    let up = match (&opts.up, file.up) {
-        (Some(text), _) => parse_up(text)?,
-        (None, Some((x, y, z))) => parse_up(&format!("{x},{y},{z}"))?,
-        (None, None) => glam::DVec3::Z,
-    };
-    let args = ResolvedSetup {
-        machine: opts
-            .machine
-            .clone()
-            .or(file.machine)
-            .unwrap_or_else(|| thinplan_knowledge::DEFAULT_MACHINE.into()),
-        tools: opts
-            .tools
-            .clone()
-            .or(file.tool_set)
-            .unwrap_or_else(|| thinplan_knowledge::DEFAULT_TOOL_SET.into()),
-        material: opts
-            .material
-            .clone()
-            .or(file.material)
-            .unwrap_or_else(|| thinplan_knowledge::DEFAULT_MATERIAL.into()),
-    };
-    let missing = |what: &str, id: &str, known: Vec<&String>| CliError {
-        code: exit::KNOWLEDGE,
-        kind: "knowledge",
-        message: format!(
-            "set-up: no {what} `{id}` in {} (known: {})",
-            k.origin,
-            known
-                .iter()
-                .map(|s| s.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
-    k.machine(&args.machine)
-        .ok_or_else(|| missing("machine", &args.machine, k.machines.keys().collect()))?;
-    k.tool_set(&args.tools)
-        .ok_or_else(|| missing("tool set", &args.tools, k.tool_sets.keys().collect()))?;
-    k.material(&args.material)
-        .ok_or_else(|| missing("material", &args.material, k.materials.keys().collect()))?;
-    Ok(Setup {
-        up,
-        machine: args.machine.clone(),
-        tool_set: args.tools.clone(),
-        material: args.material.clone(),
-        provenance: Provenance::new(
-            ProvenanceSource::User,
-            if opts.setup.is_some() {
-                "cli.setup_file"
-            } else {
-                "cli.setup"
-            },
-        )
-        .with_value("up_x", up.x)
-        .with_value("up_y", up.y)
-        .with_value("up_z", up.z),
-    })
-}
-
-/// An impossible set-up is refused: the part, placed with `up` along the
-/// machine's z, must fit in the axis travel (checked on the corners of its
-/// box, which over-estimates a rotated part slightly: the safe side).
-fn check_fits(part: &thinplan_plan::PartRef, setup: &Setup, k: &Knowledge) -> Result<(), CliError> {
-    let m = k.machine(&setup.machine).expect("checked in make_setup");
-    let frame = thinplan_brep::Frame::from_axis_ref(glam::DVec3::ZERO, setup.up, None);
-    let b = part.summary.bbox;
-    let mut ext = [0.0f64; 3];
-    for (i, axis) in [frame.x, frame.y, frame.z].iter().enumerate() {
-        ext[i] = b[0] * axis.x.abs() + b[1] * axis.y.abs() + b[2] * axis.z.abs();
-    }
-    for (i, (name, a)) in [("x", &m.x), ("y", &m.y), ("z", &m.z)].iter().enumerate() {
-        let travel = a.travel.1 - a.travel.0;
-        if ext[i] > travel {
-            return Err(CliError {
-                code: exit::KNOWLEDGE,
-                kind: "setup",
-                message: format!(
-                    "impossible set-up: the part is {:.1} mm along machine {name} but machine `{}` travels {:.1} mm",
-                    ext[i], m.id, travel
-                ),
-            });
-        }
-    }
-    Ok(())
+    Ok(thinplan_pipeline::make_setup(&req, k)?)
 }
 
 fn plan(
@@ -620,49 +508,19 @@ fn plan(
         ProgressBar::hidden()
     } else {
         // Draws only when stderr is a terminal.
-        ProgressBar::new(5).with_style(
+        ProgressBar::new(1 + thinplan_pipeline::PLANNING_STAGES.len() as u64).with_style(
             ProgressStyle::with_template("{spinner} [{pos}/{len}] {msg}").expect("valid template"),
         )
     };
     progress.set_message(format!("import {source}"));
-    let ImportedPart {
-        part,
-        brep,
-        mut warnings,
-    } = thinplan_import::import(&source)?;
+    let mut session = Session::open(&source, setup, knowledge)?;
     progress.inc(1);
-    progress.set_message("set-up");
-    check_fits(&part, &setup, &knowledge)?;
-    let mut plan = Plan::new(part, setup);
-    plan.notes
-        .insert("knowledge".into(), knowledge.origin.clone());
-    plan.notes
-        .insert("thinplan_version".into(), env!("CARGO_PKG_VERSION").into());
-    progress.inc(1);
-    progress.set_message("recognise, connect");
-    let machine = knowledge
-        .machine(&plan.setup.machine)
-        .expect("checked in make_setup");
-    let recognition = thinplan_recognise::recognise(&brep, plan.setup.up, &knowledge, machine);
-    plan.stiffness_features = recognition.features;
-    plan.connections = recognition.connections;
-    plan.stages_done.extend([Stage::Recognise, Stage::Connect]);
-    warnings.extend(recognition.warnings);
-    progress.inc(1);
-    progress.set_message("sequence");
-    thinplan_sequence::run(&plan, &knowledge).apply_to(&mut plan);
-    progress.inc(1);
-    progress.set_message("determine machining features");
-    let determination =
-        thinplan_determine::determine(&plan, &brep, &knowledge).map_err(|e| CliError {
-            code: exit::INTERNAL,
-            kind: "determine",
-            message: e.to_string(),
-        })?;
-    warnings.extend(determination.warnings.iter().cloned());
-    determination.apply_to(&mut plan);
-    progress.inc(1);
+    session.run_all(|stage| {
+        progress.inc(1);
+        progress.set_message(format!("{stage:?}").to_lowercase());
+    })?;
     progress.finish_and_clear();
+    let Session { plan, warnings, .. } = session;
 
     let out = out.unwrap_or_else(|| default_out(&source));
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
