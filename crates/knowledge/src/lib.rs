@@ -14,6 +14,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 pub mod load;
+pub mod posts;
 pub mod recognition;
 pub mod resources;
 pub mod sequencing;
@@ -21,6 +22,7 @@ pub mod sizing;
 pub mod strategies;
 
 pub use load::{load_ron, parse_ron, KnowledgeError};
+pub use posts::PostProcessor;
 pub use recognition::*;
 pub use resources::*;
 pub use sequencing::*;
@@ -35,6 +37,8 @@ pub struct Knowledge {
     pub machines: BTreeMap<String, Machine>,
     pub tool_sets: BTreeMap<String, ToolSet>,
     pub materials: BTreeMap<String, Material>,
+    /// Post-processors by id (`posts/`).
+    pub posts: BTreeMap<String, PostProcessor>,
     /// Constants of the wall sizing model (`sizing.ron`).
     pub sizing: SizingKnowledge,
     /// Thresholds for recognising walls (`recognition_walls.ron`).
@@ -72,6 +76,14 @@ const BUILTIN: &[(&str, &str)] = &[
         "materials/al7075.ron",
         include_str!("../../../knowledge/materials/al7075.ron"),
     ),
+    (
+        "posts/fanuc.ron",
+        include_str!("../../../knowledge/posts/fanuc.ron"),
+    ),
+    (
+        "posts/linuxcnc.ron",
+        include_str!("../../../knowledge/posts/linuxcnc.ron"),
+    ),
     ("sizing.ron", include_str!("../../../knowledge/sizing.ron")),
     (
         "recognition_walls.ron",
@@ -98,6 +110,10 @@ pub const SIZING_FILE: &str = "sizing.ron";
 pub const DEFAULT_MACHINE: &str = "hsm_5axis";
 pub const DEFAULT_TOOL_SET: &str = "endmills_12_20";
 pub const DEFAULT_MATERIAL: &str = "al7075";
+pub const DEFAULT_POST: &str = "linuxcnc";
+
+/// The folders of one-item-per-file knowledge, by id.
+pub const ITEM_FOLDERS: [&str; 4] = ["machines", "tools", "materials", "posts"];
 
 #[derive(Default)]
 struct Collector {
@@ -124,8 +140,12 @@ impl Knowledge {
     pub fn load_dir(dir: &Path) -> Result<Knowledge, Vec<KnowledgeError>> {
         let mut files = Vec::new();
         let mut errors = Vec::new();
-        for sub in ["machines", "tools", "materials"] {
+        for sub in ITEM_FOLDERS {
             let d = dir.join(sub);
+            // Posts are needed only for G-code; older directories have none.
+            if sub == "posts" && !d.exists() {
+                continue;
+            }
             match load::ron_files(&d) {
                 Ok(list) => {
                     for p in list {
@@ -164,7 +184,7 @@ impl Knowledge {
     }
 
     /// Builds knowledge from `(path, text)` pairs: files in `machines/`,
-    /// `tools/` and `materials/` by their folder, the [`ROOT_FILES`] by name.
+    /// `tools/`, `materials/` and `posts/` by their folder, the [`ROOT_FILES`] by name.
     pub fn from_files(
         origin: &str,
         files: &[(PathBuf, String)],
@@ -184,7 +204,7 @@ impl Knowledge {
                 .unwrap_or_default();
             let root_name = ROOT_FILES.iter().find(|r| **r == name);
             match root_name {
-                Some(r) if !matches!(parent.as_str(), "machines" | "tools" | "materials") => {
+                Some(r) if !ITEM_FOLDERS.contains(&parent.as_str()) => {
                     if root.insert(r, (path, text)).is_some() {
                         errors.push(KnowledgeError::Invalid {
                             path: path.clone(),
@@ -219,6 +239,7 @@ impl Knowledge {
                 machines: BTreeMap::new(),
                 tool_sets: BTreeMap::new(),
                 materials: BTreeMap::new(),
+                posts: BTreeMap::new(),
                 sizing,
                 wall_recognition,
                 depression_recognition,
@@ -232,10 +253,23 @@ impl Knowledge {
                 "machines" => c.add(path, text, |k| &mut k.machines, |m: &Machine| &m.id),
                 "tools" => c.add(path, text, |k| &mut k.tool_sets, |t: &ToolSet| &t.id),
                 "materials" => c.add(path, text, |k| &mut k.materials, |m: &Material| &m.id),
+                "posts" => {
+                    // Checked here, not in `validate`, so problems name the file.
+                    if let Ok(p) = parse_ron::<PostProcessor>(text, path) {
+                        for problem in p.problems() {
+                            c.errors.push(KnowledgeError::Invalid {
+                                path: path.clone(),
+                                reason: problem,
+                            });
+                        }
+                    }
+                    c.add(path, text, |k| &mut k.posts, |p: &PostProcessor| &p.id)
+                }
                 _ => c.errors.push(KnowledgeError::Invalid {
                     path: path.clone(),
-                    reason: "not in a known knowledge folder (machines/, tools/, materials/)"
-                        .into(),
+                    reason:
+                        "not in a known knowledge folder (machines/, tools/, materials/, posts/)"
+                            .into(),
                 }),
             }
         }
@@ -259,6 +293,10 @@ impl Knowledge {
 
     pub fn material(&self, id: &str) -> Option<&Material> {
         self.materials.get(id)
+    }
+
+    pub fn post(&self, id: &str) -> Option<&PostProcessor> {
+        self.posts.get(id)
     }
 }
 

@@ -32,7 +32,7 @@ fn repository_knowledge_loads_and_equals_the_embedded_copy() {
 fn copy_of_knowledge(tag: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("thinplan-knowledge-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
-    for sub in ["machines", "tools", "materials"] {
+    for sub in ITEM_FOLDERS {
         std::fs::create_dir_all(d.join(sub)).unwrap();
         for e in std::fs::read_dir(repo_knowledge().join(sub)).unwrap() {
             let p = e.unwrap().path();
@@ -215,4 +215,95 @@ fn tall_wall_rule_reads_the_test_10_remark() {
     assert!(!rule.allows(72.0, 12.0, 48.0));
     // H = H_w is left to the bending model.
     assert!(rule.allows(60.0, 12.0, 60.0));
+}
+
+#[test]
+fn both_posts_load_and_linuxcnc_is_the_default() {
+    let k = Knowledge::builtin().unwrap();
+    assert!(k.post(DEFAULT_POST).is_some());
+    assert_eq!(k.posts.keys().collect::<Vec<_>>(), ["fanuc", "linuxcnc"]);
+    for p in k.posts.values() {
+        assert!(p.problems().is_empty(), "{:?}", p.problems());
+    }
+}
+
+#[test]
+fn a_directory_without_posts_still_loads() {
+    let d = copy_of_knowledge("no-posts");
+    std::fs::remove_dir_all(d.join("posts")).unwrap();
+    let k = Knowledge::load_dir(&d).unwrap();
+    assert!(k.posts.is_empty());
+}
+
+#[test]
+fn a_misspelt_post_block_variant_names_file_line_and_column() {
+    let d = copy_of_knowledge("post-variant");
+    let f = d.join("posts/fanuc.ron");
+    let text = std::fs::read_to_string(&f).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.contains("Raw(\"O0001\")"))
+        .unwrap()
+        + 1;
+    std::fs::write(&f, text.replace("Raw(\"O0001\")", "Raww(\"O0001\")")).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    let msg = errors[0].to_string();
+    assert!(msg.contains("fanuc.ron"), "{msg}");
+    assert!(msg.contains(&format!(":{line}:")), "{msg}");
+    assert!(msg.contains("Raww"), "{msg}");
+}
+
+#[test]
+fn an_unknown_post_placeholder_names_the_file_post_and_field() {
+    let d = copy_of_knowledge("post-placeholder");
+    let f = d.join("posts/linuxcnc.ron");
+    let text = std::fs::read_to_string(&f).unwrap();
+    let text = text
+        .replace("T{tool} M6", "T{tol} M6")
+        // An operation placeholder where only program ones are known.
+        .replace("Code(\"M2\")", "Code(\"M2 {rpm}\")")
+        .replace("chord_tolerance: 0.005", "chord_tolerance: -1.0");
+    std::fs::write(&f, text).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    let all: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+    assert_eq!(all.len(), 3, "{all:?}");
+    assert!(
+        all.iter()
+            .all(|m| m.contains("linuxcnc.ron") && m.contains("post `linuxcnc`")),
+        "{all:?}"
+    );
+    assert!(
+        all.iter()
+            .any(|m| m.contains("tool_change[0]") && m.contains("unknown placeholder `{tol}`")),
+        "{all:?}"
+    );
+    assert!(
+        all.iter().any(|m| m.contains("program_end[0]")
+            && m.contains("`{rpm}`")
+            && m.contains("known only in")),
+        "{all:?}"
+    );
+    assert!(all.iter().any(|m| m.contains("chord_tolerance")), "{all:?}");
+}
+
+#[test]
+fn an_unknown_post_field_and_a_duplicate_post_id_are_refused() {
+    let d = copy_of_knowledge("post-field");
+    let f = d.join("posts/fanuc.ron");
+    let text = std::fs::read_to_string(&f).unwrap();
+    std::fs::write(&f, text.replace("feed_decimals", "feed_decimal")).unwrap();
+    std::fs::copy(d.join("posts/linuxcnc.ron"), d.join("posts/linuxcnc2.ron")).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    let all: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+    assert!(
+        all.iter()
+            .any(|m| m.contains("fanuc.ron:") && m.contains("feed_decimal")),
+        "{all:?}"
+    );
+    assert!(
+        all.iter()
+            .any(|m| m.contains("linuxcnc2.ron") && m.contains("duplicate id `linuxcnc`")),
+        "{all:?}"
+    );
 }
