@@ -1,0 +1,342 @@
+//! The part's top-height field on the Z-map grid, the ideal 3-axis result
+//! (what the program's tools could reach without gouging), and the per-cell
+//! classification of the simulated stock.
+
+use std::collections::VecDeque;
+
+use serde::Serialize;
+use thinplan_brep::{tessellate, Brep, TessTolerance};
+
+use crate::tools::ToolShape;
+use crate::zmap::Grid;
+
+/// The part's top height per cell by vertical rays against its
+/// tessellation (the highest hit); `floor` where no triangle lies above the
+/// cell centre. Returns the field and warnings (faces that failed to
+/// tessellate).
+pub fn part_heights(brep: &Brep, grid: &Grid, floor: f64) -> (Vec<f32>, Vec<String>) {
+    let mesh = tessellate(brep, &TessTolerance::default());
+    let warnings = mesh
+        .failed_faces
+        .iter()
+        .map(|(f, e)| format!("part face {f} not tessellated ({e}); its top is missing from the comparison"))
+        .collect();
+    let mut top = vec![floor as f32; grid.len()];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|k| mesh.positions[k as usize]);
+        let (a2, b2, c2) = (a.truncate(), b.truncate(), c.truncate());
+        let area = (b2 - a2).perp_dot(c2 - a2);
+        if area.abs() < 1e-12 {
+            continue; // vertical: no ray hits its interior
+        }
+        let lo = a2.min(b2).min(c2);
+        let hi = a2.max(b2).max(c2);
+        let (Some((i0, i1)), Some((j0, j1))) = (grid.cols(lo.x, hi.x), grid.rows(lo.y, hi.y)) else {
+            continue;
+        };
+        // Inclusive edges (a ray on a shared edge hits both triangles, same z).
+        let eps = -1e-9 * area.abs();
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let p = grid.center(i, j);
+                let w0 = (b2 - p).perp_dot(c2 - p);
+                let w1 = (c2 - p).perp_dot(a2 - p);
+                let w2 = (a2 - p).perp_dot(b2 - p);
+                let inside = if area > 0.0 {
+                    w0 >= eps && w1 >= eps && w2 >= eps
+                } else {
+                    w0 <= -eps && w1 <= -eps && w2 <= -eps
+                };
+                if inside {
+                    let z = (w0 * a.z + w1 * b.z + w2 * c.z) / area;
+                    let k = j * grid.nx + i;
+                    top[k] = top[k].max(z as f32);
+                }
+            }
+        }
+    }
+    (top, warnings)
+}
+
+/// The lowest stock a tool can leave without cutting below `part` anywhere:
+/// the grey-scale closing of the part's height field by the tool's lower
+/// surface (dilate: the lowest safe tip height at each tool position; erode:
+/// the lowest surface those positions sweep). Tool positions are the cell
+/// centres, the grid padded by the tool radius on every side. The bull-nose
+/// profile is the flat disc of radius `R − r` combined with the sphere cap of
+/// radius `r`, each applied in turn (Minkowski sum), so the flat part uses a
+/// fast row decomposition and only the rounded part is applied cell by cell.
+pub fn ideal_field(part: &[f32], grid: &Grid, tool: &ToolShape, floor: f32) -> Vec<f32> {
+    let c = grid.cell;
+    let pad = (tool.radius() / c).ceil() as usize + 2;
+    let (w, h) = (grid.nx + 2 * pad, grid.ny + 2 * pad);
+    let mut f = vec![floor; w * h];
+    for j in 0..grid.ny {
+        let row = &part[j * grid.nx..(j + 1) * grid.nx];
+        f[(j + pad) * w + pad..(j + pad) * w + pad + grid.nx].copy_from_slice(row);
+    }
+    let core = (tool.radius() - tool.corner_radius) / c;
+    let cap = sphere_offsets(tool.corner_radius, c);
+    let mut g = disc_filter(&f, w, h, core, true);
+    if !cap.is_empty() {
+        g = offsets_filter(&g, w, h, &cap, true);
+        g = offsets_filter(&g, w, h, &cap, false);
+    }
+    g = disc_filter(&g, w, h, core, false);
+    let mut out = vec![floor; grid.len()];
+    for j in 0..grid.ny {
+        out[j * grid.nx..(j + 1) * grid.nx]
+            .copy_from_slice(&g[(j + pad) * w + pad..(j + pad) * w + pad + grid.nx]);
+    }
+    out
+}
+
+/// Offsets `(di, dj, height)` of a sphere cap of radius `r` (height above its
+/// lowest point), in cells.
+fn sphere_offsets(r: f64, cell: f64) -> Vec<(isize, isize, f32)> {
+    if r <= 0.0 {
+        return vec![];
+    }
+    let m = (r / cell).floor() as isize;
+    let mut v = Vec::new();
+    for dj in -m..=m {
+        for di in -m..=m {
+            let d = ((di * di + dj * dj) as f64).sqrt() * cell;
+            if d <= r * (1.0 + 1e-9) {
+                v.push((di, dj, (r - (r * r - d * d).max(0.0).sqrt()) as f32));
+            }
+        }
+    }
+    v
+}
+
+/// max (`dilate`) of `f(q+δ) − h(δ)`, or min of `f(q+δ) + h(δ)`, over the offsets.
+fn offsets_filter(f: &[f32], w: usize, h: usize, offs: &[(isize, isize, f32)], dilate: bool) -> Vec<f32> {
+    let mut out = f.to_vec();
+    for j in 0..h {
+        for i in 0..w {
+            let mut best = f[j * w + i];
+            for &(di, dj, hh) in offs {
+                let (x, y) = (i as isize + di, j as isize + dj);
+                if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
+                    continue;
+                }
+                let v = f[y as usize * w + x as usize];
+                if dilate {
+                    best = best.max(v - hh);
+                } else {
+                    best = best.min(v + hh);
+                }
+            }
+            out[j * w + i] = best;
+        }
+    }
+    out
+}
+
+/// Flat max/min filter over the disc of `radius` cells (cell centres within
+/// it), by rows: the disc is a stack of row segments, each a sliding window.
+fn disc_filter(f: &[f32], w: usize, h: usize, radius: f64, max: bool) -> Vec<f32> {
+    let m = (radius + 1e-9).floor().max(0.0) as usize;
+    let half = |dj: usize| ((radius * radius - (dj * dj) as f64).max(0.0) + 1e-9).sqrt().floor() as usize;
+    let mut out = f.to_vec();
+    let mut widths: Vec<usize> = (0..=m).map(half).collect();
+    widths.sort_unstable();
+    widths.dedup();
+    let mut rowbuf = vec![0f32; w];
+    let mut slid = vec![0f32; w * h];
+    for &k in &widths {
+        for j in 0..h {
+            sliding(&f[j * w..(j + 1) * w], k, &mut rowbuf, max);
+            slid[j * w..(j + 1) * w].copy_from_slice(&rowbuf);
+        }
+        for dj in 0..=m {
+            if half(dj) != k {
+                continue;
+            }
+            for sgn in [-1isize, 1] {
+                if dj == 0 && sgn < 0 {
+                    continue;
+                }
+                let d = sgn * dj as isize;
+                for j in 0..h {
+                    let y = j as isize + d;
+                    if y < 0 || y >= h as isize {
+                        continue;
+                    }
+                    let src = &slid[y as usize * w..(y as usize + 1) * w];
+                    let dst = &mut out[j * w..(j + 1) * w];
+                    for (o, &s) in dst.iter_mut().zip(src) {
+                        *o = if max { o.max(s) } else { o.min(s) };
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Sliding-window max/min of half-width `k` (monotone deque, O(n)).
+fn sliding(src: &[f32], k: usize, out: &mut [f32], max: bool) {
+    let n = src.len();
+    let mut dq: VecDeque<usize> = VecDeque::new();
+    let better = |a: f32, b: f32| if max { a >= b } else { a <= b };
+    for i in 0..n + k {
+        if i < n {
+            while let Some(&b) = dq.back() {
+                if better(src[i], src[b]) {
+                    dq.pop_back();
+                } else {
+                    break;
+                }
+            }
+            dq.push_back(i);
+        }
+        if i >= k {
+            let o = i - k;
+            while let Some(&f) = dq.front() {
+                if f + k < o {
+                    dq.pop_front();
+                } else {
+                    break;
+                }
+            }
+            out[o] = src[dq[0]];
+        }
+    }
+}
+
+/// What a cell of the final stock is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum CellClass {
+    /// Within tolerance of the part.
+    Ok,
+    /// Stock below the part by more than the tolerance.
+    Gouge,
+    /// Stock above the part that one of the program's tools could have removed.
+    Missed,
+    /// Stock above the part that none of the program's tools can reach.
+    Unreachable,
+}
+
+/// Classifies every cell.
+pub fn classify(stock: &[f32], part: &[f32], ideal: &[f32], tol: f64) -> Vec<CellClass> {
+    stock
+        .iter()
+        .zip(part)
+        .zip(ideal)
+        .map(|((&s, &p), &id)| {
+            let (s, p, id) = (s as f64, p as f64, id as f64);
+            if s < p - tol {
+                CellClass::Gouge
+            } else if s > p + tol {
+                if s > id + tol {
+                    CellClass::Missed
+                } else {
+                    CellClass::Unreachable
+                }
+            } else {
+                CellClass::Ok
+            }
+        })
+        .collect()
+}
+
+/// A 4-connected patch of cells of one class.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Region {
+    pub cells: usize,
+    /// Σ |stock − part| · cell area, mm³.
+    pub volume_mm3: f64,
+    /// Largest |stock − part| in the patch, mm.
+    pub worst_mm: f64,
+    /// Cell centre of the worst cell.
+    pub at: [f64; 2],
+    /// The program line that last cut the worst cell (gouges), if any.
+    pub line: Option<usize>,
+    /// `[xmin, ymin, xmax, ymax]` of the patch's cell centres.
+    pub bbox: [f64; 4],
+}
+
+/// Finds the patches of `class`, largest volume first.
+pub fn regions(
+    classes: &[CellClass],
+    class: CellClass,
+    stock: &[f32],
+    part: &[f32],
+    last_line: &[u32],
+    grid: &Grid,
+) -> Vec<Region> {
+    let mut seen = vec![false; classes.len()];
+    let mut out = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..classes.len() {
+        if seen[start] || classes[start] != class {
+            continue;
+        }
+        seen[start] = true;
+        stack.push(start);
+        let mut reg = Region {
+            cells: 0,
+            volume_mm3: 0.0,
+            worst_mm: -1.0,
+            at: [0.0; 2],
+            line: None,
+            bbox: [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+        };
+        while let Some(k) = stack.pop() {
+            let (i, j) = (k % grid.nx, k / grid.nx);
+            let c = grid.center(i, j);
+            let d = (stock[k] as f64 - part[k] as f64).abs();
+            reg.cells += 1;
+            reg.volume_mm3 += d * grid.cell_area();
+            // Ties go to the lowest index, so the result does not depend on the fill order.
+            if d > reg.worst_mm || (d == reg.worst_mm && k < idx_of(&reg.at, grid)) {
+                reg.worst_mm = d;
+                reg.at = [c.x, c.y];
+                reg.line = (last_line[k] > 0).then_some(last_line[k] as usize);
+            }
+            reg.bbox = [
+                reg.bbox[0].min(c.x),
+                reg.bbox[1].min(c.y),
+                reg.bbox[2].max(c.x),
+                reg.bbox[3].max(c.y),
+            ];
+            let mut push = |n: usize| {
+                if !seen[n] && classes[n] == class {
+                    seen[n] = true;
+                    stack.push(n);
+                }
+            };
+            if i > 0 {
+                push(k - 1);
+            }
+            if i + 1 < grid.nx {
+                push(k + 1);
+            }
+            if j > 0 {
+                push(k - grid.nx);
+            }
+            if j + 1 < grid.ny {
+                push(k + grid.nx);
+            }
+        }
+        if class != CellClass::Gouge {
+            reg.line = None;
+        }
+        out.push(reg);
+    }
+    out.sort_by(|a, b| {
+        b.volume_mm3
+            .total_cmp(&a.volume_mm3)
+            .then(a.at[1].total_cmp(&b.at[1]))
+            .then(a.at[0].total_cmp(&b.at[0]))
+    });
+    out
+}
+
+fn idx_of(at: &[f64; 2], grid: &Grid) -> usize {
+    let i = ((at[0] - grid.x0) / grid.cell).floor().max(0.0) as usize;
+    let j = ((at[1] - grid.y0) / grid.cell).floor().max(0.0) as usize;
+    j * grid.nx + i
+}

@@ -1,0 +1,615 @@
+//! The Z-map (one dexel per cell along +Z): each cell of a regular XY grid
+//! stores the height of the stock's top at the cell centre, and every move
+//! lowers the cells its tool passes over.
+//!
+//! Sweeping is analytic per cell, not by stamping the tool at sub-steps:
+//! - a straight move (any Z change) lowers each cell to the minimum over the
+//!   move of `z(s) + h(ρ(s))` (tip height plus the tool profile at the
+//!   horizontal distance ρ). For a flat end mill that is the tip height at one
+//!   end of the interval where the cell is under the tool; for rounded tools
+//!   the function is convex in `s` (a convex increasing profile of a convex
+//!   distance, plus a linear term), so its minimum is found by bisection on the
+//!   derivative to 1e-9 mm. Exact at every cell centre.
+//! - a constant-Z arc is exact too: the nearest point of the arc to a cell is
+//!   radial if the cell's angle lies in the arc's span, else an end point.
+//! - helical or spiral arcs (Z or radius changing) are cut into chords whose
+//!   sagitta is at most ⅛ cell, each swept exactly as above, so the error is
+//!   below ⅛ cell (< ¼ cell as required).
+//!
+//! The only discretisation is the grid itself: the stock is known at cell
+//! centres, and volumes are sums of cell columns.
+
+use glam::{DVec2, DVec3};
+use serde::Serialize;
+
+use crate::gcode::{Move, MoveKind, Program, Spindle};
+use crate::tools::{ToolLibrary, ToolShape};
+
+/// Most cells a grid may have (memory: 8 bytes a cell plus the comparison's).
+pub const MAX_CELLS: usize = 60_000_000;
+
+/// Depth below which a change is not counted as removed material, mm.
+pub const REMOVAL_EPS: f64 = 1e-3;
+
+/// A grid rim margin against floating-point grazing: a tool whose edge runs
+/// exactly through a cell centre does not cut it.
+const RIM_EPS: f64 = 1e-7;
+
+/// An axis-aligned box blank, mm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Blank {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Blank {
+    /// Parses `"xmin,ymin,zmin,xmax,ymax,zmax"`.
+    pub fn parse(s: &str) -> Result<Blank, String> {
+        let v: Vec<f64> = s
+            .split(',')
+            .map(|t| t.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| format!("blank `{s}`: {e} (expected xmin,ymin,zmin,xmax,ymax,zmax)"))?;
+        if v.len() != 6 {
+            return Err(format!(
+                "blank `{s}`: expected 6 numbers xmin,ymin,zmin,xmax,ymax,zmax, got {}",
+                v.len()
+            ));
+        }
+        let b = Blank {
+            min: DVec3::new(v[0], v[1], v[2]),
+            max: DVec3::new(v[3], v[4], v[5]),
+        };
+        b.validate()?;
+        Ok(b)
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.min.is_finite() && self.max.is_finite()) {
+            return Err("blank has a non-finite coordinate".into());
+        }
+        if self.min.cmpge(self.max).any() {
+            return Err(format!(
+                "blank min {:?} must be below max {:?} on every axis",
+                self.min.to_array(),
+                self.max.to_array()
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A regular grid of cells over the blank's XY; cell `(i, j)` has its centre
+/// at `(x0 + (i + ½)·cell, y0 + (j + ½)·cell)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Grid {
+    pub x0: f64,
+    pub y0: f64,
+    pub cell: f64,
+    pub nx: usize,
+    pub ny: usize,
+}
+
+impl Grid {
+    /// The grid covering `[min, max]` with square cells of `cell` mm.
+    pub fn new(min: DVec2, max: DVec2, cell: f64) -> Result<Grid, String> {
+        if !(cell.is_finite() && cell > 0.0) {
+            return Err(format!("cell size {cell} must be positive"));
+        }
+        let ext = max - min;
+        let nx = (ext.x / cell).ceil().max(1.0);
+        let ny = (ext.y / cell).ceil().max(1.0);
+        if !(nx * ny <= MAX_CELLS as f64) {
+            return Err(format!(
+                "a {cell} mm grid over {:.1} × {:.1} mm has {nx} × {ny} cells, more than {MAX_CELLS}; use a larger cell",
+                ext.x, ext.y
+            ));
+        }
+        Ok(Grid {
+            x0: min.x,
+            y0: min.y,
+            cell,
+            nx: nx as usize,
+            ny: ny as usize,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.nx * self.ny
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    #[inline]
+    pub fn center(&self, i: usize, j: usize) -> DVec2 {
+        DVec2::new(
+            self.x0 + (i as f64 + 0.5) * self.cell,
+            self.y0 + (j as f64 + 0.5) * self.cell,
+        )
+    }
+
+    /// Indices of the cells whose centres lie in `[lo, hi]` along one axis.
+    #[inline]
+    fn range(origin: f64, cell: f64, n: usize, lo: f64, hi: f64) -> Option<(usize, usize)> {
+        let a = ((lo - origin) / cell - 0.5).ceil().max(0.0);
+        let b = ((hi - origin) / cell - 0.5).floor().min(n as f64 - 1.0);
+        if a.is_nan() || b.is_nan() || a > b {
+            None
+        } else {
+            Some((a as usize, b as usize))
+        }
+    }
+
+    pub(crate) fn cols(&self, lo: f64, hi: f64) -> Option<(usize, usize)> {
+        Self::range(self.x0, self.cell, self.nx, lo, hi)
+    }
+
+    pub(crate) fn rows(&self, lo: f64, hi: f64) -> Option<(usize, usize)> {
+        Self::range(self.y0, self.cell, self.ny, lo, hi)
+    }
+
+    pub fn cell_area(&self) -> f64 {
+        self.cell * self.cell
+    }
+}
+
+/// What one sweep did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CutStats {
+    /// Cells evaluated under the tool.
+    pub visited: u64,
+    /// Cells lowered.
+    pub lowered: u64,
+    /// Material removed, mm³.
+    pub volume: f64,
+    /// Deepest cut in one cell, mm.
+    pub max_depth: f64,
+    /// Where that was (cell centre, new height).
+    pub deepest: DVec3,
+}
+
+impl CutStats {
+    fn add(&mut self, o: &CutStats) {
+        self.visited += o.visited;
+        self.lowered += o.lowered;
+        self.volume += o.volume;
+        if o.max_depth > self.max_depth {
+            self.max_depth = o.max_depth;
+            self.deepest = o.deepest;
+        }
+    }
+
+    /// Whether the move removed material (deeper than [`REMOVAL_EPS`]).
+    pub fn removed(&self) -> bool {
+        self.max_depth > REMOVAL_EPS
+    }
+}
+
+/// Why a move is reported as a crash.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum CrashKind {
+    /// A G0 that removes material.
+    RapidIntoStock,
+    /// A feed move that removes material with the spindle stopped.
+    SpindleOff,
+}
+
+/// A move that cut where it must not.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Crash {
+    pub line: usize,
+    pub kind: CrashKind,
+    pub volume_mm3: f64,
+    pub depth_mm: f64,
+    /// Cell centre and new height of the deepest cut.
+    pub at: [f64; 3],
+}
+
+/// The totals of a replay.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReplayStats {
+    pub cut: CutStats,
+    pub feed_length: f64,
+    pub rapid_length: f64,
+    /// Feed length of moves that removed no material.
+    pub air_length: f64,
+    pub crashes: Vec<Crash>,
+    /// Tools that made feed moves, ascending.
+    pub tools_used: Vec<u32>,
+    pub warnings: Vec<String>,
+}
+
+/// An error that stops a replay.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimError(pub String);
+
+impl std::fmt::Display for SimError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SimError {}
+
+/// The stock as a Z-map.
+#[derive(Debug, Clone)]
+pub struct ZMap {
+    pub grid: Grid,
+    pub blank: Blank,
+    /// Stock top per cell (row-major, `j * nx + i`), mm.
+    pub top: Vec<f32>,
+    /// The program line that last lowered each cell (0 = never cut).
+    pub last_line: Vec<u32>,
+}
+
+impl ZMap {
+    /// A full box blank with cells of `cell` mm.
+    pub fn new(blank: Blank, cell: f64) -> Result<ZMap, SimError> {
+        blank.validate().map_err(SimError)?;
+        let grid = Grid::new(blank.min.truncate(), blank.max.truncate(), cell).map_err(SimError)?;
+        Ok(ZMap {
+            grid,
+            blank,
+            top: vec![blank.max.z as f32; grid.len()],
+            last_line: vec![0; grid.len()],
+        })
+    }
+
+    /// Stock volume, mm³.
+    pub fn volume(&self) -> f64 {
+        let z0 = self.blank.min.z;
+        self.top.iter().map(|&z| z as f64 - z0).sum::<f64>() * self.grid.cell_area()
+    }
+
+    /// Stock height at the cell containing `p` (None outside the grid).
+    pub fn height_at(&self, p: DVec2) -> Option<f64> {
+        let g = &self.grid;
+        let i = ((p.x - g.x0) / g.cell).floor();
+        let j = ((p.y - g.y0) / g.cell).floor();
+        if i < 0.0 || j < 0.0 || i >= g.nx as f64 || j >= g.ny as f64 {
+            return None;
+        }
+        Some(self.top[j as usize * g.nx + i as usize] as f64)
+    }
+
+    #[inline]
+    fn lower(&mut self, i: usize, j: usize, z: f64, line: u32, st: &mut CutStats) {
+        st.visited += 1;
+        let k = j * self.grid.nx + i;
+        let z = z.max(self.blank.min.z) as f32;
+        let cur = self.top[k];
+        if z < cur {
+            let depth = (cur - z) as f64;
+            if depth > 1e-6 {
+                st.lowered += 1;
+                st.volume += depth * self.grid.cell_area();
+                self.last_line[k] = line;
+            }
+            self.top[k] = z;
+            if depth > st.max_depth {
+                st.max_depth = depth;
+                let c = self.grid.center(i, j);
+                st.deepest = DVec3::new(c.x, c.y, z as f64);
+            }
+        }
+    }
+
+    /// Sweeps `tool` with its tip along the straight segment `p0 → p1`.
+    pub fn sweep_line(&mut self, tool: &ToolShape, p0: DVec3, p1: DVec3, line: u32) -> CutStats {
+        let mut st = CutStats::default();
+        let r = tool.radius() - RIM_EPS;
+        if r <= 0.0 {
+            return st;
+        }
+        let (a, b) = (p0.truncate(), p1.truncate());
+        let d = b - a;
+        let len = d.length();
+        let Some((j0, j1)) = self.grid.rows(a.y.min(b.y) - r, a.y.max(b.y) + r) else {
+            return st;
+        };
+        let flat = tool.corner_radius <= 0.0;
+        if len < 1e-9 {
+            // A plunge: the lowest tip height applies under the whole tool.
+            let z = p0.z.min(p1.z);
+            for j in j0..=j1 {
+                let yc = self.grid.center(0, j).y;
+                let dy = yc - a.y;
+                let half2 = r * r - dy * dy;
+                if half2 < 0.0 {
+                    continue;
+                }
+                let half = half2.sqrt();
+                let Some((i0, i1)) = self.grid.cols(a.x - half, a.x + half) else {
+                    continue;
+                };
+                for i in i0..=i1 {
+                    let rho = (self.grid.center(i, j) - a).length();
+                    if let Some(h) = tool.height_at(rho.min(tool.radius())) {
+                        self.lower(i, j, z + h, line, &mut st);
+                    }
+                }
+            }
+            return st;
+        }
+        let u = d / len;
+        let k = (p1.z - p0.z) / len;
+        for j in j0..=j1 {
+            let yc = self.grid.center(0, j).y;
+            let Some((xlo, xhi)) = capsule_row(a, b, u, len, r, yc) else {
+                continue;
+            };
+            let Some((i0, i1)) = self.grid.cols(xlo, xhi) else {
+                continue;
+            };
+            for i in i0..=i1 {
+                let w = self.grid.center(i, j) - a;
+                let s0 = w.dot(u);
+                let perp = w.perp_dot(u).abs();
+                if perp > r {
+                    continue;
+                }
+                let half = (r * r - perp * perp).sqrt();
+                let lo = (s0 - half).max(0.0);
+                let hi = (s0 + half).min(len);
+                if lo > hi {
+                    continue;
+                }
+                let z = if flat {
+                    p0.z + k * if k >= 0.0 { lo } else { hi }
+                } else {
+                    let s = min_convex(tool, k, perp, s0, lo, hi);
+                    let rho = perp.hypot(s - s0).min(tool.radius());
+                    p0.z + k * s + tool.height_at(rho).unwrap_or(0.0)
+                };
+                self.lower(i, j, z, line, &mut st);
+            }
+        }
+        st
+    }
+
+    /// Sweeps `tool` along an arc at constant Z from `s` turning `sweep` rad
+    /// (positive counter-clockwise) about `center`.
+    fn sweep_flat_arc(&mut self, tool: &ToolShape, center: DVec2, s: DVec2, e: DVec2, sweep: f64, z: f64, line: u32) -> CutStats {
+        let mut st = CutStats::default();
+        let r = tool.radius() - RIM_EPS;
+        // Counter-clockwise from `from` by `span`.
+        let (from, span) = if sweep >= 0.0 { (s, sweep) } else { (e, -sweep) };
+        let ra = (s - center).length();
+        let a0 = (from - center).to_angle();
+        let (mut lo, mut hi) = (s.min(e), s.max(e));
+        for q in 0..4 {
+            let ang = q as f64 * std::f64::consts::FRAC_PI_2;
+            if (ang - a0).rem_euclid(std::f64::consts::TAU) <= span {
+                let p = center + ra * DVec2::from_angle(ang);
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        let Some((j0, j1)) = self.grid.rows(lo.y - r, hi.y + r) else {
+            return st;
+        };
+        let Some((i0, i1)) = self.grid.cols(lo.x - r, hi.x + r) else {
+            return st;
+        };
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let c = self.grid.center(i, j);
+                let v = c - center;
+                let rho_c = v.length();
+                if (rho_c - ra).abs() > r {
+                    continue;
+                }
+                let in_span = rho_c > 1e-12
+                    && (v.to_angle() - a0).rem_euclid(std::f64::consts::TAU) <= span + 1e-12;
+                let dist = if in_span {
+                    (rho_c - ra).abs()
+                } else if rho_c <= 1e-12 {
+                    ra
+                } else {
+                    (c - s).length().min((c - e).length())
+                };
+                if dist > r {
+                    continue;
+                }
+                if let Some(h) = tool.height_at(dist) {
+                    self.lower(i, j, z + h, line, &mut st);
+                }
+            }
+        }
+        st
+    }
+
+    /// Sweeps one canonical move (see the module doc for the accuracy).
+    pub fn sweep_move(&mut self, tool: &ToolShape, m: &Move, start: DVec3) -> CutStats {
+        let line = m.line.min(u32::MAX as usize) as u32;
+        match m.kind {
+            MoveKind::Rapid | MoveKind::Line => self.sweep_line(tool, start, m.end, line),
+            MoveKind::Arc { center, sweep, .. } => {
+                let (s, e) = (start.truncate(), m.end.truncate());
+                let r0 = (s - center).length();
+                let r1 = (e - center).length();
+                if (m.end.z - start.z).abs() < 1e-9 && (r0 - r1).abs() < 1e-9 {
+                    return self.sweep_flat_arc(tool, center, s, e, sweep, start.z, line);
+                }
+                // Helix or spiral: chords with sagitta ≤ cell/8.
+                let sag = self.grid.cell / 8.0;
+                let rmax = r0.max(r1);
+                let step = if sag >= rmax {
+                    std::f64::consts::FRAC_PI_2
+                } else {
+                    (2.0 * (1.0 - sag / rmax).acos()).min(std::f64::consts::FRAC_PI_2)
+                };
+                let n = ((sweep.abs() / step).ceil() as usize).clamp(1, 1 << 20);
+                let a0 = (s - center).to_angle();
+                let mut st = CutStats::default();
+                let mut prev = start;
+                for q in 1..=n {
+                    let t = q as f64 / n as f64;
+                    let p = if q == n {
+                        m.end
+                    } else {
+                        let rad = r0 + (r1 - r0) * t;
+                        let xy = center + rad * DVec2::from_angle(a0 + sweep * t);
+                        xy.extend(start.z + (m.end.z - start.z) * t)
+                    };
+                    st.add(&self.sweep_line(tool, prev, p, line));
+                    prev = p;
+                }
+                st
+            }
+        }
+    }
+
+    /// Replays a whole program.
+    pub fn replay(&mut self, program: &Program, tools: &ToolLibrary) -> Result<ReplayStats, SimError> {
+        let mut out = ReplayStats::default();
+        let mut used = std::collections::BTreeSet::new();
+        let mut warned_no_tool = false;
+        for m in &program.moves {
+            if !m.end.is_finite() {
+                continue; // only some axes known yet: nothing to sweep
+            }
+            let len = m.length();
+            if m.is_feed() {
+                out.feed_length += len;
+            } else {
+                out.rapid_length += len;
+            }
+            let start = if m.positioning() {
+                // Brought in from above the stock.
+                let above = m.end.z.max(self.blank.max.z + 1.0);
+                DVec3::new(
+                    if m.start.x.is_finite() { m.start.x } else { m.end.x },
+                    if m.start.y.is_finite() { m.start.y } else { m.end.y },
+                    if m.start.z.is_finite() { m.start.z } else { above },
+                )
+            } else {
+                m.start
+            };
+            let Some(t) = m.tool else {
+                if m.is_feed() && !warned_no_tool {
+                    warned_no_tool = true;
+                    out.warnings.push(format!(
+                        "line {}: feed move with no tool in the spindle (not simulated)",
+                        m.line
+                    ));
+                }
+                continue;
+            };
+            let Some(shape) = tools.get(&t) else {
+                return Err(SimError(format!(
+                    "line {}: tool T{t} has no shape (give it in the tool table)",
+                    m.line
+                )));
+            };
+            if m.is_feed() {
+                used.insert(t);
+            }
+            let st = self.sweep_move(shape, m, start);
+            out.cut.add(&st);
+            let crash = if !st.removed() {
+                if m.is_feed() {
+                    out.air_length += len;
+                }
+                None
+            } else if !m.is_feed() {
+                Some(CrashKind::RapidIntoStock)
+            } else if m.spindle == Spindle::Off {
+                Some(CrashKind::SpindleOff)
+            } else {
+                None
+            };
+            if let Some(kind) = crash {
+                out.crashes.push(Crash {
+                    line: m.line,
+                    kind,
+                    volume_mm3: st.volume,
+                    depth_mm: st.max_depth,
+                    at: st.deepest.to_array(),
+                });
+            }
+        }
+        out.tools_used = used.into_iter().collect();
+        Ok(out)
+    }
+}
+
+/// The x-interval of the capsule (segment `a→b` grown by `r`) on the row `y`.
+#[inline]
+fn capsule_row(a: DVec2, b: DVec2, u: DVec2, len: f64, r: f64, y: f64) -> Option<(f64, f64)> {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for c in [a, b] {
+        let dy = y - c.y;
+        let h2 = r * r - dy * dy;
+        if h2 >= 0.0 {
+            let h = h2.sqrt();
+            lo = lo.min(c.x - h);
+            hi = hi.max(c.x + h);
+        }
+    }
+    // The band: 0 ≤ (p−a)·u ≤ len and |(p−a)×u| ≤ r, each linear in x.
+    let dy = y - a.y;
+    let mut blo = f64::NEG_INFINITY;
+    let mut bhi = f64::INFINITY;
+    let mut ok = true;
+    // (x−ax)·ux + dy·uy ∈ [0, len]
+    for (coef, off, l, h) in [(u.x, dy * u.y, 0.0, len), (-u.y, dy * u.x, -r, r)] {
+        // (x−ax)·coef + off ∈ [l, h]  (the cross product: (x−ax)·uy − dy·ux, negated)
+        if coef.abs() < 1e-15 {
+            if off < l || off > h {
+                ok = false;
+            }
+        } else {
+            let (x1, x2) = ((l - off) / coef, (h - off) / coef);
+            blo = blo.max(x1.min(x2) + a.x);
+            bhi = bhi.min(x1.max(x2) + a.x);
+        }
+    }
+    if ok && blo <= bhi {
+        lo = lo.min(blo);
+        hi = hi.max(bhi);
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// Minimises the convex `k·s + h(√(perp² + (s−s0)²))` over `[lo, hi]`.
+#[inline]
+fn min_convex(tool: &ToolShape, k: f64, perp: f64, s0: f64, lo: f64, hi: f64) -> f64 {
+    let deriv = |s: f64| {
+        let ds = s - s0;
+        let rho = perp.hypot(ds);
+        if rho < 1e-15 || ds == 0.0 {
+            return k;
+        }
+        let sl = tool.slope_at(rho);
+        if sl.is_infinite() {
+            return if ds > 0.0 { f64::INFINITY } else { f64::NEG_INFINITY };
+        }
+        k + sl * ds / rho
+    };
+    if k == 0.0 {
+        return s0.clamp(lo, hi);
+    }
+    if deriv(lo) >= 0.0 {
+        return lo;
+    }
+    if deriv(hi) <= 0.0 {
+        return hi;
+    }
+    let (mut a, mut b) = (lo, hi);
+    for _ in 0..60 {
+        let m = 0.5 * (a + b);
+        if deriv(m) < 0.0 {
+            a = m;
+        } else {
+            b = m;
+        }
+        if b - a < 1e-9 {
+            break;
+        }
+    }
+    0.5 * (a + b)
+}
