@@ -554,6 +554,7 @@ fn wall_steps(
             owner: sf.id,
             shape,
             side_adjacency,
+            hole_adjacency: Vec::new(),
             bottom_adjacency: Adjacency::Product,
             provenance: prov,
         });

@@ -131,6 +131,7 @@ pub(crate) fn face_mill(
                 z_max: (hi - web_top) / c.abs(),
             },
             side_adjacency: vec![Adjacency::Open; pts.len()],
+            hole_adjacency: Vec::new(),
             bottom_adjacency: if (lo - web_top).abs() < EPS {
                 Adjacency::Product
             } else {

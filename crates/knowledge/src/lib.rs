@@ -13,6 +13,7 @@ use std::collections::btree_map::Entry;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+pub mod interference;
 pub mod load;
 pub mod posts;
 pub mod recognition;
@@ -21,6 +22,7 @@ pub mod sequencing;
 pub mod sizing;
 pub mod strategies;
 
+pub use interference::*;
 pub use load::{load_ron, parse_ron, KnowledgeError};
 pub use posts::PostProcessor;
 pub use recognition::*;
@@ -50,15 +52,18 @@ pub struct Knowledge {
     pub sequencing: SequencingKnowledge,
     /// Machining-feature determination strategies (`strategies.ron`).
     pub strategies: StrategyKnowledge,
+    /// Interference handling and remaining material (`interference.ron`).
+    pub interference: InterferenceKnowledge,
 }
 
 /// Files at the knowledge root; each is required.
-pub const ROOT_FILES: [&str; 5] = [
+pub const ROOT_FILES: [&str; 6] = [
     SIZING_FILE,
     "recognition_walls.ron",
     "recognition_depressions.ron",
     SEQUENCING_FILE,
     STRATEGIES_FILE,
+    INTERFERENCE_FILE,
 ];
 
 /// The embedded copy of the repository's `knowledge/` directory:
@@ -100,6 +105,10 @@ const BUILTIN: &[(&str, &str)] = &[
     (
         "strategies.ron",
         include_str!("../../../knowledge/strategies.ron"),
+    ),
+    (
+        "interference.ron",
+        include_str!("../../../knowledge/interference.ron"),
     ),
 ];
 
@@ -223,13 +232,23 @@ impl Knowledge {
             parse_root::<SequencingKnowledge>(&root, SEQUENCING_FILE, origin, &mut errors);
         let strategies =
             parse_root::<StrategyKnowledge>(&root, STRATEGIES_FILE, origin, &mut errors);
+        let interference =
+            parse_root::<InterferenceKnowledge>(&root, INTERFERENCE_FILE, origin, &mut errors);
         let (
             Some(sizing),
             Some(wall_recognition),
             Some(depression_recognition),
             Some(sequencing),
             Some(strategies),
-        ) = (sizing, walls, depressions, sequencing, strategies)
+            Some(interference),
+        ) = (
+            sizing,
+            walls,
+            depressions,
+            sequencing,
+            strategies,
+            interference,
+        )
         else {
             return Err(errors);
         };
@@ -245,6 +264,7 @@ impl Knowledge {
                 depression_recognition,
                 sequencing,
                 strategies,
+                interference,
             }),
             errors,
         };
@@ -455,6 +475,32 @@ fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
     }
     for problem in k.strategies.problems() {
         errors.push(invalid("strategy knowledge (strategies.ron)", problem));
+    }
+    for problem in k.interference.problems() {
+        errors.push(invalid(
+            "interference knowledge (interference.ron)",
+            problem,
+        ));
+    }
+    // Rules that name a strategy block must name one that exists.
+    for r in &k.interference.keep_order {
+        if let FeatureSelector::Block { block, .. } = &r.select {
+            let known = k
+                .strategies
+                .strategies
+                .iter()
+                .flat_map(|s| s.blocks.iter())
+                .any(|b| b.id() == block);
+            if !known {
+                errors.push(invalid(
+                    "interference knowledge (interference.ron)",
+                    format!(
+                        "keep_order rule `{}` selects block `{block}`, which no strategy in strategies.ron has",
+                        r.id
+                    ),
+                ));
+            }
+        }
     }
     for m in k.materials.values() {
         let what = format!("material `{}`", m.id);

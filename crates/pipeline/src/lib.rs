@@ -326,9 +326,18 @@ impl Session {
                 d.apply_to(&mut self.plan);
                 Ok(())
             }
-            Stage::Resolve | Stage::Operations | Stage::Order | Stage::Output => Err(
-                PipelineError::new(ErrorKind::Stage, format!("{stage:?} is not built yet")),
-            ),
+            Stage::Resolve => {
+                needs(Stage::Determine)?;
+                let r = thinplan_resolve::resolve(&self.plan, &self.brep, &self.knowledge)
+                    .map_err(|e| PipelineError::new(ErrorKind::Stage, e.to_string()))?;
+                self.warnings.extend(r.warnings.iter().cloned());
+                r.apply_to(&mut self.plan);
+                Ok(())
+            }
+            Stage::Operations | Stage::Order | Stage::Output => Err(PipelineError::new(
+                ErrorKind::Stage,
+                format!("{stage:?} is not built yet"),
+            )),
         }
     }
 
@@ -358,7 +367,7 @@ impl Session {
 }
 
 /// The last stage this build can run.
-pub const LAST_BUILT: Stage = Stage::Determine;
+pub const LAST_BUILT: Stage = Stage::Resolve;
 
 /// An error with its sources, on one line.
 pub fn error_chain(e: &dyn std::error::Error) -> String {

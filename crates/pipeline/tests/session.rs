@@ -16,7 +16,12 @@ fn runs_stages_in_order_with_progress() {
     s.run_all(|st| seen.push(st)).expect("plans");
     assert_eq!(
         seen,
-        vec![Stage::Recognise, Stage::Sequence, Stage::Determine]
+        vec![
+            Stage::Recognise,
+            Stage::Sequence,
+            Stage::Determine,
+            Stage::Resolve
+        ]
     );
     assert!(s.plan.stages_done.contains(&Stage::Determine));
     assert!(!s.plan.machining_features.is_empty());

@@ -125,11 +125,34 @@ pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Plan, PlanIoError> {
 /// time. Each step is a pure function of the JSON value; every version ever
 /// released keeps a frozen fixture under `crates/plan/tests/fixtures/` that
 /// must keep loading.
+/// Version 2 gave machining features the adjacency of their hole edges
+/// (`hole_adjacency`, one list per hole); a v1 plan's features had none
+/// recorded, so each hole gets an empty list (unknown).
+fn migrate_1_to_2(value: &mut Value) {
+    let Some(features) = value
+        .get_mut("machining_features")
+        .and_then(Value::as_array_mut)
+    else {
+        return;
+    };
+    for f in features {
+        let holes = f
+            .pointer("/shape/region/holes")
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len);
+        if let Some(obj) = f.as_object_mut() {
+            obj.entry("hole_adjacency")
+                .or_insert_with(|| Value::Array(vec![Value::Array(Vec::new()); holes]));
+        }
+    }
+}
+
 pub fn migrate(value: &mut Value, from: u64) {
     let mut v = from;
     while v < SCHEMA_VERSION as u64 {
-        // No released version precedes 1 yet; future steps go here, e.g.
-        // 1 => migrate_1_to_2(value),
+        if v == 1 {
+            migrate_1_to_2(value);
+        }
         v += 1;
     }
     if let Some(obj) = value.as_object_mut() {

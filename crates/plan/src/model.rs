@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 /// The schema version this build writes. Older versions are migrated on load
 /// (see [`crate::io::migrate`]).
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 macro_rules! id_type {
     ($(#[$m:meta])* $name:ident, $prefix:literal) => {
@@ -331,8 +331,11 @@ pub struct MachiningFeature {
     pub id: MachiningFeatureId,
     pub owner: StiffnessFeatureId,
     pub shape: Prism,
-    /// Adjacency per profile edge of the outer loop, then the bottom.
+    /// Adjacency per profile edge of the outer loop (edge i runs from
+    /// vertex i to vertex i + 1).
     pub side_adjacency: Vec<Adjacency>,
+    /// Adjacency per edge of each hole (island), in `shape.region.holes` order.
+    pub hole_adjacency: Vec<Vec<Adjacency>>,
     pub bottom_adjacency: Adjacency,
     pub provenance: Provenance,
 }

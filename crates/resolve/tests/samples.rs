@@ -1,0 +1,198 @@
+//! Stage 6 on every sample part, checked independently of the stage's own
+//! slicing: volumes from the B-rep's mass properties and the features'
+//! prisms (shoelace here), point membership by ray casting against the
+//! part's mesh, acyclicity by a topological sort written here.
+
+use glam::DVec3;
+use thinplan_pipeline::{load_knowledge, make_setup, Session, SetupRequest};
+use thinplan_plan::{Adjacency, MachiningFeature, Plan, Stage};
+
+fn planned(name: &str) -> Session {
+    let k = load_knowledge(None).expect("builtin knowledge");
+    let setup = make_setup(&SetupRequest::default(), &k).expect("default set-up");
+    let mut s = Session::open(&format!("builtin:{name}"), setup, k).expect("opens");
+    s.run_to(Stage::Resolve, &Default::default(), |_| {})
+        .expect("plans");
+    s
+}
+
+const SAMPLES: [&str; 8] = [
+    "tall_rib",
+    "flange_cutouts",
+    "wall_holes",
+    "flange_web_slot",
+    "crossing_ribs",
+    "isogrid",
+    "pentagon_pocket",
+    "wing_rib",
+];
+
+fn loop_area(pts: &[[f64; 2]]) -> f64 {
+    let n = pts.len();
+    0.5 * (0..n)
+        .map(|i| pts[i][0] * pts[(i + 1) % n][1] - pts[(i + 1) % n][0] * pts[i][1])
+        .sum::<f64>()
+}
+
+fn pts(l: &thinplan_plan::ProfileLoop) -> Vec<[f64; 2]> {
+    l.vertices.iter().map(|v| [v.x, v.y]).collect()
+}
+
+fn feature_volume(f: &MachiningFeature) -> f64 {
+    let r = &f.shape.region;
+    let a = loop_area(&pts(&r.outer)).abs()
+        - r.holes.iter().map(|h| loop_area(&pts(h)).abs()).sum::<f64>();
+    a * (f.shape.z_max - f.shape.z_min)
+}
+
+fn inside_loop(p: [f64; 2], l: &[[f64; 2]]) -> bool {
+    let mut inside = false;
+    let n = l.len();
+    for i in 0..n {
+        let (a, b) = (l[i], l[(i + 1) % n]);
+        if (a[1] > p[1]) != (b[1] > p[1])
+            && a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]) > p[0]
+        {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+fn in_feature(f: &MachiningFeature, p: DVec3) -> bool {
+    let fr = &f.shape.frame;
+    let y = fr.z.cross(fr.x);
+    let d = p - fr.origin;
+    let w = d.dot(fr.z);
+    if w <= f.shape.z_min || w >= f.shape.z_max {
+        return false;
+    }
+    let q = [d.dot(fr.x), d.dot(y)];
+    inside_loop(q, &pts(&f.shape.region.outer))
+        && !f.shape.region.holes.iter().any(|h| inside_loop(q, &pts(h)))
+}
+
+/// Ray casting along a skew direction against the part's triangles.
+fn in_part(mesh: &thinplan_brep::Mesh, p: DVec3) -> bool {
+    let dir = DVec3::new(0.5773, 0.5774, 0.5775).normalize();
+    let mut hits = 0;
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        let (e1, e2) = (b - a, c - a);
+        let h = dir.cross(e2);
+        let det = e1.dot(h);
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let s = p - a;
+        let u = s.dot(h) / det;
+        let q = s.cross(e1);
+        let v = dir.dot(q) / det;
+        let t = e2.dot(q) / det;
+        if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 {
+            hits += 1;
+        }
+    }
+    hits % 2 == 1
+}
+
+fn acyclic(plan: &Plan) -> bool {
+    let n = plan.machining_features.len();
+    let mut indeg = vec![0; n];
+    let mut succ = vec![Vec::new(); n];
+    for c in &plan.machining_constraints {
+        succ[c.first.0 as usize].push(c.second.0 as usize);
+        indeg[c.second.0 as usize] += 1;
+    }
+    let mut ready: Vec<usize> = (0..n).filter(|&i| indeg[i] == 0).collect();
+    let mut seen = 0;
+    while let Some(v) = ready.pop() {
+        seen += 1;
+        for &w in &succ[v] {
+            indeg[w] -= 1;
+            if indeg[w] == 0 {
+                ready.push(w);
+            }
+        }
+    }
+    seen == n
+}
+
+#[test]
+fn part_and_features_make_up_the_blank() {
+    for name in SAMPLES {
+        let s = planned(name);
+        let bb = s.brep.bbox();
+        let e = bb.extent();
+        let blank = e.x * e.y * e.z;
+        let part = s.brep.volume();
+        let features: f64 = s.plan.machining_features.iter().map(feature_volume).sum();
+        let err = (part + features - blank) / blank;
+        println!(
+            "{name}: blank {blank:.1} part {part:.1} features {features:.1} ({} features) error {:.2e}",
+            s.plan.machining_features.len(),
+            err
+        );
+        assert!(err.abs() < 1e-3, "{name}: part + features − blank = {err:.3e} of the blank");
+    }
+}
+
+#[test]
+fn features_overlap_neither_the_product_nor_each_other() {
+    for name in SAMPLES {
+        let s = planned(name);
+        let mesh = thinplan_brep::tessellate(&s.brep, &s.brep.mass_tolerance());
+        let bb = s.brep.bbox();
+        let (lo, e) = (bb.min, bb.extent());
+        // A deterministic low-discrepancy point set (R3 sequence).
+        let (a1, a2, a3) = (0.819_172_513_4, 0.671_043_606_5, 0.549_700_477_5);
+        let (mut both, mut none, n) = (0, 0, 3000);
+        for i in 0..n {
+            let f = i as f64 + 0.5;
+            let u = DVec3::new((f * a1).fract(), (f * a2).fract(), (f * a3).fract());
+            let p = lo + u * e;
+            let inside_part = in_part(&mesh, p);
+            let owners = s
+                .plan
+                .machining_features
+                .iter()
+                .filter(|m| in_feature(m, p))
+                .count();
+            assert!(owners <= 1, "{name}: point {p} in {owners} features");
+            if inside_part && owners == 1 {
+                both += 1;
+            }
+            if !inside_part && owners == 0 {
+                none += 1;
+            }
+        }
+        // Points within the mesh's chord of a curved face may disagree.
+        assert!(both <= n / 500, "{name}: {both} of {n} points in the part and a feature");
+        assert!(none <= n / 500, "{name}: {none} of {n} points in neither");
+    }
+}
+
+#[test]
+fn constraints_stay_acyclic_and_adjacency_is_complete() {
+    for name in SAMPLES {
+        let s = planned(name);
+        let up = s.plan.setup.up;
+        assert!(acyclic(&s.plan), "{name}: machining constraints have a cycle");
+        for f in &s.plan.machining_features {
+            assert!((f.shape.frame.z - up).length() < 1e-9, "{name}: {} not along up", f.id);
+            assert_eq!(f.side_adjacency.len(), f.shape.region.outer.vertices.len());
+            assert_eq!(f.hole_adjacency.len(), f.shape.region.holes.len());
+            for (h, a) in f.shape.region.holes.iter().zip(&f.hole_adjacency) {
+                assert_eq!(h.vertices.len(), a.len());
+            }
+        }
+        // Every wall stands in the blank with product beside some feature.
+        assert!(
+            s.plan
+                .machining_features
+                .iter()
+                .any(|f| f.side_adjacency.contains(&Adjacency::Product)),
+            "{name}: no feature borders the product"
+        );
+    }
+}
