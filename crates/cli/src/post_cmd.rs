@@ -1,0 +1,190 @@
+//! `thinplan post PLAN`: writes a saved plan's operations as an NC program
+//! through a post-processor from knowledge; a thin driver of `thinplan-post`.
+//! [`write_program`] is also what `thinplan plan --gcode` calls.
+
+use std::path::{Path, PathBuf};
+
+use thinplan_knowledge::{Knowledge, DEFAULT_POST};
+use thinplan_plan::Plan;
+use thinplan_post::NcProgram;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct PostArgs {
+    /// A saved plan file (with operations).
+    pub plan: PathBuf,
+    /// Post-processor id from the knowledge's `posts/` (e.g. linuxcnc, fanuc).
+    #[arg(long = "post", default_value = DEFAULT_POST)]
+    pub post: String,
+    /// The NC program to write; default: the plan's path with the post's
+    /// extension (`part.plan.ron` → `part.plan.ngc`).
+    #[arg(short = 'o', long = "out")]
+    pub out: Option<PathBuf>,
+    /// Also write the LinuxCNC tool table (`.tbl`) the program's tool numbers refer to.
+    #[arg(long = "tool-table")]
+    pub tool_table: Option<PathBuf>,
+    /// Knowledge directory (default: the built-in copy).
+    #[arg(long)]
+    pub knowledge: Option<PathBuf>,
+}
+
+/// Loads the plan and knowledge, posts, writes, and prints a one-line summary.
+pub fn run(args: &PostArgs) -> Result<(), String> {
+    let plan = thinplan_plan::load(&args.plan).map_err(|e| e.to_string())?;
+    let knowledge = match &args.knowledge {
+        Some(d) => Knowledge::load_dir(d),
+        None => Knowledge::builtin(),
+    }
+    .map_err(|errors| {
+        errors
+            .iter()
+            .map(|e| e.to_string())
+            .collect::<Vec<_>>()
+            .join("\n")
+    })?;
+    let out = match &args.out {
+        Some(o) => o.clone(),
+        None => {
+            let ext = &post_of(&knowledge, &args.post)?.extension;
+            args.plan.with_extension(ext)
+        }
+    };
+    let p = write_program(
+        &plan,
+        &knowledge,
+        &args.post,
+        &out,
+        args.tool_table.as_deref(),
+    )?;
+    println!(
+        "{}: {} lines, {} tool change(s), {} arc(s), feed {:.1} mm, rapid {:.1} mm (post {})",
+        out.display(),
+        p.line_count,
+        p.tool_changes,
+        p.arc_count,
+        p.feed_length_mm,
+        p.rapid_length_mm,
+        args.post
+    );
+    Ok(())
+}
+
+fn post_of<'k>(
+    knowledge: &'k Knowledge,
+    id: &str,
+) -> Result<&'k thinplan_knowledge::PostProcessor, String> {
+    knowledge.post(id).ok_or_else(|| {
+        let known: Vec<&str> = knowledge.posts.keys().map(String::as_str).collect();
+        format!(
+            "unknown post `{id}` in knowledge {} (known: {})",
+            knowledge.origin,
+            if known.is_empty() {
+                "none: the knowledge has no posts/ folder".to_string()
+            } else {
+                known.join(", ")
+            }
+        )
+    })
+}
+
+/// Posts `plan` with knowledge's post `post_id` and the set-up's tool set,
+/// writes the program to `out_path` (atomically) and, when asked, the
+/// LinuxCNC tool table to `tool_table_path`. Nothing is written on error.
+pub fn write_program(
+    plan: &Plan,
+    knowledge: &Knowledge,
+    post_id: &str,
+    out_path: &Path,
+    tool_table_path: Option<&Path>,
+) -> Result<NcProgram, String> {
+    let post = post_of(knowledge, post_id)?;
+    let tools = knowledge.tool_set(&plan.setup.tool_set).ok_or_else(|| {
+        format!(
+            "the plan's tool set `{}` is not in knowledge {}",
+            plan.setup.tool_set, knowledge.origin
+        )
+    })?;
+    let program = thinplan_post::post(plan, post, tools)
+        .map_err(|e| format!("cannot post with `{post_id}`: {e}"))?;
+    thinplan_plan::io::write_atomic(out_path, program.text.as_bytes())
+        .map_err(|e| format!("{}: cannot write the program: {e}", out_path.display()))?;
+    if let Some(t) = tool_table_path {
+        thinplan_plan::io::write_atomic(t, program.tool_table.as_bytes())
+            .map_err(|e| format!("{}: cannot write the tool table: {e}", t.display()))?;
+    }
+    Ok(program)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+    use thinplan_plan::*;
+
+    fn plan_with_one_operation() -> Plan {
+        let part = PartRef {
+            source: "builtin:test".into(),
+            format: PartFormat::Native,
+            sha256: "ab".repeat(32),
+            declared_units: "mm".into(),
+            summary: PartSummary {
+                solids: 1,
+                faces: 6,
+                bbox: [10.0, 10.0, 10.0],
+                volume: 1000.0,
+            },
+        };
+        let setup = Setup {
+            up: DVec3::Z,
+            machine: "hsm_5axis".into(),
+            tool_set: "endmills_12_20".into(),
+            material: "al7075".into(),
+            provenance: Provenance::new(ProvenanceSource::Default, "test"),
+        };
+        let mut plan = Plan::new(part, setup);
+        plan.operations.push(Operation {
+            id: OperationId(1),
+            feature: MachiningFeatureId(1),
+            method: "test".into(),
+            tool: "em12".into(),
+            tool_axis: DVec3::Z,
+            spindle_rpm: 10000.0,
+            start: DVec3::new(0.0, 0.0, 2.0),
+            moves: vec![PathMove {
+                to: DVec3::new(10.0, 0.0, -1.0),
+                arc: None,
+                feed: 500.0,
+                region: Region3::Rest,
+            }],
+            provenance: Provenance::new(ProvenanceSource::Default, "test"),
+        });
+        plan
+    }
+
+    #[test]
+    fn run_writes_the_program_and_the_tool_table() {
+        let dir = std::env::temp_dir().join(format!("thinplan-post-cmd-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let plan_path = dir.join("part.plan.ron");
+        thinplan_plan::save(&plan_with_one_operation(), &plan_path).unwrap();
+        let args = PostArgs {
+            plan: plan_path.clone(),
+            post: "fanuc".into(),
+            out: None,
+            tool_table: Some(dir.join("tools.tbl")),
+            knowledge: None,
+        };
+        run(&args).unwrap();
+        let text = std::fs::read_to_string(dir.join("part.plan.nc")).unwrap();
+        assert!(text.starts_with("%\nO0001\n"), "{text}");
+        assert!(std::fs::read_to_string(dir.join("tools.tbl"))
+            .unwrap()
+            .starts_with("T1 P1 D12.000"));
+        let bad = PostArgs {
+            post: "heidenhain".into(),
+            ..args
+        };
+        let e = run(&bad).unwrap_err();
+        assert!(e.contains("unknown post `heidenhain`") && e.contains("fanuc, linuxcnc"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
