@@ -184,7 +184,10 @@ mod tests {
             ..args
         };
         let e = run(&bad).unwrap_err();
-        assert!(e.contains("unknown post `heidenhain`") && e.contains("fanuc, linuxcnc"), "{e}");
+        assert!(
+            e.contains("unknown post `heidenhain`") && e.contains("fanuc, linuxcnc"),
+            "{e}"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
