@@ -62,6 +62,8 @@ pub enum PostError {
     UnknownOperation(OperationId),
     #[error("the operation order lists {0} twice")]
     RepeatedOperation(OperationId),
+    #[error("the operation order leaves out {0}")]
+    OmittedOperation(OperationId),
     #[error("the plan's set-up uses tool set `{plan}`, but tool set `{given}` was given")]
     ToolSetMismatch { plan: String, given: String },
     #[error("{operation}: tool `{tool}` is not in tool set `{tool_set}`")]
@@ -307,7 +309,8 @@ fn ordered_operations(plan: &Plan) -> Result<Vec<&Operation>, PostError> {
         return Ok(by_id.into_values().collect());
     }
     let mut seen = std::collections::BTreeSet::new();
-    plan.operation_order
+    let ops = plan
+        .operation_order
         .iter()
         .map(|id| {
             if !seen.insert(*id) {
@@ -318,7 +321,12 @@ fn ordered_operations(plan: &Plan) -> Result<Vec<&Operation>, PostError> {
                 .copied()
                 .ok_or(PostError::UnknownOperation(*id))
         })
-        .collect()
+        .collect::<Result<Vec<_>, _>>()?;
+    // A partial order would silently drop cutting: refuse it.
+    if let Some(id) = by_id.keys().find(|id| !seen.contains(id)) {
+        return Err(PostError::OmittedOperation(*id));
+    }
+    Ok(ops)
 }
 
 fn tool_number(op: &Operation, tools: &ToolSet) -> Result<usize, PostError> {

@@ -344,6 +344,13 @@ fn bad_plans_are_refused_naming_the_operation() {
     );
 
     let mut plan = rich_plan();
+    plan.operation_order.pop();
+    assert_eq!(
+        post(&plan, lc, tools).unwrap_err(),
+        PostError::OmittedOperation(OperationId(3))
+    );
+
+    let mut plan = rich_plan();
     plan.operation_order.push(OperationId(9));
     assert_eq!(
         post(&plan, lc, tools).unwrap_err(),

@@ -103,3 +103,46 @@ fn rs274_agrees_in_another_order_with_two_tool_changes() {
     plan.operation_order = vec![OperationId(3), OperationId(1), OperationId(2)];
     check(&plan, "reordered");
 }
+
+/// Arcs with awkward numbers: centres off the output grid, radii from
+/// 0.3 mm to 800 mm, sweeps down to a hair (rounded to one point, so
+/// written as a line), a helix with a fractional rise. The interpreter's
+/// radius check (start vs end radius after rounding) must pass, and the
+/// lengths must agree.
+#[test]
+fn rs274_reads_arcs_with_awkward_numbers() {
+    use glam::DVec3;
+    let mut plan = empty_plan();
+    let mut moves = Vec::new();
+    let mut p = DVec3::new(0.1234567, -0.7654321, -0.3333333);
+    let z = DVec3::Z;
+    let mut s = 0.123_f64;
+    for i in 0..40 {
+        // A deterministic pseudo-random walk of arcs.
+        s = (s * 9301.0 + 49297.0) % 233280.0 / 233280.0 * 7.0 % 1.0;
+        let r = [0.3, 1.7, 13.3, 97.1, 800.0][i % 5] * (0.9 + 0.2 * s);
+        let sweep = [2.9, 0.4, 1e-4, 5.9, 0.05][(i / 5) % 5] * (0.7 + 0.3 * s);
+        let a0 = s * 6.0;
+        let c = p - r * DVec3::new(a0.cos(), a0.sin(), 0.0);
+        let cw = i % 2 == 0;
+        let a1 = if cw { a0 - sweep } else { a0 + sweep };
+        let dz = if i % 3 == 0 { -0.1 * s } else { 0.0 };
+        let to = c + r * DVec3::new(a1.cos(), a1.sin(), 0.0) + DVec3::new(0.0, 0.0, p.z - c.z + dz);
+        moves.push(arc(
+            to.into(),
+            c.into(),
+            if i % 4 == 1 { -z } else { z },
+            cw ^ (i % 4 == 1),
+            700.0,
+        ));
+        p = to;
+    }
+    plan.operations = vec![op(
+        1,
+        "em12",
+        9000.0,
+        [0.1234567, -0.7654321, -0.3333333],
+        moves,
+    )];
+    check(&plan, "awkward");
+}
