@@ -15,6 +15,7 @@ use thinplan_pipeline::{ErrorKind, PipelineError, Session};
 use thinplan_plan::Setup;
 
 mod pocket_cmd;
+mod post_cmd;
 
 /// Exit codes (documented in docs/CLI.md).
 mod exit {
@@ -163,6 +164,8 @@ enum Command {
         #[arg(long)]
         depressions_only: bool,
     },
+    /// Write a saved plan's operations as an NC program through a post-processor.
+    Post(post_cmd::PostArgs),
     /// List the bundled sample parts.
     Samples,
 }
@@ -295,6 +298,11 @@ fn run(command: Command) -> Result<(), CliError> {
             println!("overall face accuracy: {:.2} %", 100.0 * score.overall());
             Ok(())
         }
+        Command::Post(args) => post_cmd::run(&args).map_err(|message| CliError {
+            code: exit::BAD_INPUT,
+            kind: "post",
+            message,
+        }),
         Command::Samples => {
             for (name, _) in thinplan_import::SAMPLES {
                 println!("builtin:{name}");
@@ -412,23 +420,6 @@ fn inspect(part: &str, json: bool) -> Result<(), CliError> {
     Ok(())
 }
 
-#[derive(Serialize)]
-struct PlanReport<'a> {
-    part: &'a str,
-    plan_file: String,
-    stages_done: &'a [thinplan_plan::Stage],
-    solids: usize,
-    faces: usize,
-    volume: f64,
-    stiffness_features: usize,
-    connections: usize,
-    stiffness_constraints: usize,
-    refusals: usize,
-    machining_features: usize,
-    operations: usize,
-    warnings: &'a [String],
-}
-
 fn load_knowledge(dir: Option<&Path>) -> Result<Knowledge, CliError> {
     Ok(thinplan_pipeline::load_knowledge(dir)?)
 }
@@ -520,7 +511,12 @@ fn plan(
         progress.set_message(format!("{stage:?}").to_lowercase());
     })?;
     progress.finish_and_clear();
-    let Session { plan, warnings, .. } = session;
+    let Session {
+        plan,
+        warnings,
+        brep,
+        ..
+    } = session;
 
     let out = out.unwrap_or_else(|| default_out(&source));
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -535,32 +531,44 @@ fn plan(
         kind: "output",
         message: error_chain(&e),
     })?;
-    let report = PlanReport {
-        part: &source,
-        plan_file: out.display().to_string(),
-        stages_done: &plan.stages_done,
-        solids: plan.part.summary.solids,
-        faces: plan.part.summary.faces,
-        volume: plan.part.summary.volume,
-        stiffness_features: plan.stiffness_features.len(),
-        connections: plan.connections.len(),
-        stiffness_constraints: plan.stiffness_constraints.len(),
-        refusals: plan.refusals.len(),
-        machining_features: plan.machining_features.len(),
-        operations: plan.operations.len(),
-        warnings: &warnings,
-    };
+    let plan_file = out.display().to_string();
     if json {
-        println!("{}", serde_json::to_string(&report).expect("serialises"));
+        let v = thinplan_pipeline::report::plan_json(&plan, &brep, &plan_file, &warnings);
+        println!("{v}");
     } else {
         println!(
             "planned {} ({} solid(s), {} faces, {:.1} mm3): stages {:?}",
-            report.part, report.solids, report.faces, report.volume, report.stages_done
+            source,
+            plan.part.summary.solids,
+            plan.part.summary.faces,
+            plan.part.summary.volume,
+            plan.stages_done
         );
+        println!(
+            "  {} stiffness feature(s), {} connection(s), {} stiffness constraint(s)",
+            plan.stiffness_features.len(),
+            plan.connections.len(),
+            plan.stiffness_constraints.len()
+        );
+        println!(
+            "  {} machining feature(s), {} machining constraint(s), {} refusal(s)",
+            plan.machining_features.len(),
+            plan.machining_constraints.len(),
+            plan.refusals.len()
+        );
+        if let (Some(b), Some(f)) = (
+            plan.notes.get("resolve.blank_volume"),
+            plan.notes.get("resolve.features_volume"),
+        ) {
+            println!(
+                "  blank {b} mm3 = part {:.3} mm3 + machining features {f} mm3",
+                plan.part.summary.volume
+            );
+        }
         for w in &warnings {
             println!("warning: {w}");
         }
-        println!("plan written to {}", report.plan_file);
+        println!("plan written to {plan_file}");
     }
     Ok(())
 }

@@ -360,3 +360,94 @@ fn score_mfcad_prints_the_per_class_table() {
         .unwrap();
     assert!(overall >= 99.7, "{overall}");
 }
+
+/// `plan --json` machining features follow the contract (docs/CLI.md) and
+/// are consistent among themselves: with the part they fill the blank,
+/// profiles lie at the top of their depth range, one adjacency per edge,
+/// constraints and refusals name features that exist.
+#[test]
+fn plan_json_machining_features_follow_the_contract() {
+    let d = tmp("contract");
+    let (code, v) = run_json(
+        thinplan()
+            .args(["plan", "builtin:crossing_ribs", "--json", "--out"])
+            .arg(d.join("p.json")),
+    );
+    assert_eq!(code, 0, "{v}");
+    let mf = v["machining_features"].as_array().unwrap();
+    assert!(!mf.is_empty());
+    let ids: std::collections::BTreeSet<&str> =
+        mf.iter().map(|f| f["id"].as_str().unwrap()).collect();
+    let sf: std::collections::BTreeSet<&str> = v["stiffness_features"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["id"].as_str().unwrap())
+        .collect();
+    let mut total = 0.0;
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for f in mf {
+        assert!(sf.contains(f["owner"].as_str().unwrap()), "{f}");
+        let access: Vec<f64> = serde_json::from_value(f["access"].clone()).unwrap();
+        assert_eq!(access, vec![0.0, 0.0, 1.0]);
+        let depth: [f64; 2] = serde_json::from_value(f["depth"].clone()).unwrap();
+        assert!(depth[0] > depth[1], "{f}");
+        let profile: Vec<Vec<[f64; 3]>> = serde_json::from_value(f["profile"].clone()).unwrap();
+        let edges: Vec<Vec<String>> =
+            serde_json::from_value(f["adjacency"]["edges"].clone()).unwrap();
+        assert_eq!(profile.len(), edges.len());
+        let mut area = 0.0;
+        for (i, (l, e)) in profile.iter().zip(&edges).enumerate() {
+            assert_eq!(l.len(), e.len());
+            assert!(e
+                .iter()
+                .all(|a| ["product", "open", "feature"].contains(&a.as_str())));
+            let a: f64 = (0..l.len())
+                .map(|j| {
+                    let (p, q) = (l[j], l[(j + 1) % l.len()]);
+                    0.5 * (p[0] * q[1] - q[0] * p[1])
+                })
+                .sum();
+            area += if i == 0 { a.abs() } else { -a.abs() };
+            for p in l {
+                assert!((p[2] - depth[0]).abs() < 1e-6, "{f}");
+                for k in 0..2 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+        }
+        lo[2] = lo[2].min(depth[1]);
+        hi[2] = hi[2].max(depth[0]);
+        let vol = area * (depth[0] - depth[1]);
+        let reported = f["volume"].as_f64().unwrap();
+        assert!(
+            (vol - reported).abs() <= 1e-6 * reported.max(1.0),
+            "{vol} vs {reported}"
+        );
+        total += reported;
+    }
+    // Every feature lies in the blank: the part's bounding box (inspect).
+    let (_, info) = run_json(thinplan().args(["inspect", "--json", "builtin:crossing_ribs"]));
+    let bbox: [f64; 3] = serde_json::from_value(info["bbox"].clone()).unwrap();
+    for k in 0..3 {
+        assert!(
+            hi[k] - lo[k] <= bbox[k] + 1e-6,
+            "features span {lo:?}..{hi:?}"
+        );
+    }
+    let blank = bbox[0] * bbox[1] * bbox[2];
+    let part = v["volume"].as_f64().unwrap();
+    assert!(
+        ((part + total) - blank).abs() <= 1e-3 * blank,
+        "part {part} + features {total} vs blank {blank}"
+    );
+    for c in v["constraints"].as_array().unwrap() {
+        assert!(ids.contains(c["first"].as_str().unwrap()), "{c}");
+        assert!(ids.contains(c["then"].as_str().unwrap()), "{c}");
+        assert!(["before", "simultaneous"].contains(&c["kind"].as_str().unwrap()));
+    }
+    for r in v["refused"].as_array().unwrap() {
+        assert!(r["rule"].is_string() && r["reason"].is_string(), "{r}");
+    }
+}

@@ -16,6 +16,8 @@ use thinplan_import::ImportedPart;
 use thinplan_knowledge::Knowledge;
 use thinplan_plan::{Plan, Provenance, ProvenanceSource, Setup, Stage};
 
+pub mod report;
+
 /// Why a session could not go on; `kind` tells a driver which exit code or
 /// message style fits.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

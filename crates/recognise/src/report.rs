@@ -65,8 +65,15 @@ pub fn role_name(r: WallRole) -> &'static str {
 
 /// `{"features": [...], "connections": [...]}` as documented in docs/CLI.md.
 pub fn to_json(r: &Recognition, brep: &Brep) -> serde_json::Value {
-    let features: Vec<Value> = r
-        .features
+    json!({
+        "features": features_json(&r.features, brep),
+        "connections": connections_json(&r.connections),
+    })
+}
+
+/// The stiffness features as JSON objects (docs/CLI.md, `recognize --json`).
+pub fn features_json(features: &[thinplan_plan::StiffnessFeature], brep: &Brep) -> Vec<Value> {
+    features
         .iter()
         .map(|f| {
             let names: Vec<&str> = f
@@ -88,9 +95,12 @@ pub fn to_json(r: &Recognition, brep: &Brep) -> serde_json::Value {
                 "access": f.access.iter().map(|d| vec3(*d)).collect::<Vec<_>>(),
             })
         })
-        .collect();
-    let connections: Vec<Value> = r
-        .connections
+        .collect()
+}
+
+/// The connections as JSON objects (docs/CLI.md, `recognize --json`).
+pub fn connections_json(connections: &[thinplan_plan::Connection]) -> Vec<Value> {
+    connections
         .iter()
         .map(|c| {
             json!({
@@ -102,8 +112,7 @@ pub fn to_json(r: &Recognition, brep: &Brep) -> serde_json::Value {
                 },
             })
         })
-        .collect();
-    json!({ "features": features, "connections": connections })
+        .collect()
 }
 
 /// Fill colour of a feature by kind and role.

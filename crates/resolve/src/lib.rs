@@ -399,7 +399,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
             }
         };
         geo.push(Geo {
-            bbox: bbox_of(&vec![p.region.clone()]),
+            bbox: bbox_of(std::slice::from_ref(&p.region)),
             region: vec![p.region.clone()],
             lo: p.lo,
             top_slab: p.top_slab,
@@ -902,6 +902,9 @@ impl Graph {
             return false;
         }
         if self.reaches(ib, ia) {
+            let mut provenance = provenance;
+            provenance.values.insert("first".into(), f64::from(a.0));
+            provenance.values.insert("second".into(), f64::from(b.0));
             out.refusals.push(Refusal {
                 stage: Stage::Resolve,
                 rule: provenance.rule.clone(),
