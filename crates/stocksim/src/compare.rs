@@ -5,26 +5,60 @@
 use std::collections::VecDeque;
 
 use serde::Serialize;
-use thinplan_brep::{tessellate, Brep, TessTolerance};
+use glam::DVec2;
+use thinplan_brep::{tessellate, Brep, Mesh, TessTolerance};
 
 use crate::tools::ToolShape;
 use crate::zmap::Grid;
 
-/// The part's top height per cell by vertical rays against its
-/// tessellation (the highest hit); `floor` where no triangle lies above the
-/// cell centre. Returns the field and warnings (faces that failed to
-/// tessellate).
-pub fn part_heights(brep: &Brep, grid: &Grid, floor: f64) -> (Vec<f32>, Vec<String>) {
-    let mesh = tessellate(brep, &TessTolerance::default());
+/// The part's top height on the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PartField {
+    /// Top height at each cell centre (the highest hit of a vertical ray
+    /// against the tessellation); the floor where no part lies above.
+    pub top: Vec<f32>,
+    /// The lowest / highest of the tops at the centre and at the four points
+    /// `lateral` mm away along ±X and ±Y: a wall that passes within `lateral`
+    /// of a centre does not turn a cut at the wall into a gouge, or material
+    /// at its foot into leftover.
+    pub lo: Vec<f32>,
+    pub hi: Vec<f32>,
+}
+
+/// The part's height field by vertical rays (see [`PartField`]). Returns the
+/// field and warnings (faces that failed to tessellate).
+pub fn part_heights(brep: &Brep, grid: &Grid, floor: f64, lateral: f64) -> (PartField, Vec<String>) {
+    let tol = TessTolerance {
+        chord: (lateral / 5.0).clamp(1e-4, 0.01),
+        angle: 0.2,
+    };
+    let mesh = tessellate(brep, &tol);
     let warnings = mesh
         .failed_faces
         .iter()
         .map(|(f, e)| format!("part face {f} not tessellated ({e}); its top is missing from the comparison"))
         .collect();
+    let top = raster(&mesh, grid, floor, DVec2::ZERO);
+    let mut lo = top.clone();
+    let mut hi = top.clone();
+    if lateral > 0.0 {
+        for d in [DVec2::X, DVec2::NEG_X, DVec2::Y, DVec2::NEG_Y] {
+            let f = raster(&mesh, grid, floor, d * lateral);
+            for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(f) {
+                *l = l.min(v);
+                *h = h.max(v);
+            }
+        }
+    }
+    (PartField { top, lo, hi }, warnings)
+}
+
+/// Highest ray hit per cell, rays at the cell centres shifted by `off`.
+fn raster(mesh: &Mesh, grid: &Grid, floor: f64, off: DVec2) -> Vec<f32> {
     let mut top = vec![floor as f32; grid.len()];
     for t in &mesh.triangles {
         let [a, b, c] = t.map(|k| mesh.positions[k as usize]);
-        let (a2, b2, c2) = (a.truncate(), b.truncate(), c.truncate());
+        let (a2, b2, c2) = (a.truncate() - off, b.truncate() - off, c.truncate() - off);
         let area = (b2 - a2).perp_dot(c2 - a2);
         if area.abs() < 1e-12 {
             continue; // vertical: no ray hits its interior
@@ -55,7 +89,7 @@ pub fn part_heights(brep: &Brep, grid: &Grid, floor: f64) -> (Vec<f32>, Vec<Stri
             }
         }
     }
-    (top, warnings)
+    top
 }
 
 /// The lowest stock a tool can leave without cutting below `part` anywhere:
@@ -219,17 +253,18 @@ pub enum CellClass {
     Unreachable,
 }
 
-/// Classifies every cell.
-pub fn classify(stock: &[f32], part: &[f32], ideal: &[f32], tol: f64) -> Vec<CellClass> {
+/// Classifies every cell: a gouge below the part's `lo` − tol, leftover
+/// above its `hi` + tol (see [`PartField`]), missed when also above the ideal.
+pub fn classify(stock: &[f32], part: &PartField, ideal: &[f32], tol: f64) -> Vec<CellClass> {
     stock
         .iter()
-        .zip(part)
+        .zip(part.lo.iter().zip(&part.hi))
         .zip(ideal)
-        .map(|((&s, &p), &id)| {
-            let (s, p, id) = (s as f64, p as f64, id as f64);
-            if s < p - tol {
+        .map(|((&s, (&lo, &hi)), &id)| {
+            let (s, lo, hi, id) = (s as f64, lo as f64, hi as f64, id as f64);
+            if s < lo - tol {
                 CellClass::Gouge
-            } else if s > p + tol {
+            } else if s > hi + tol {
                 if s > id + tol {
                     CellClass::Missed
                 } else {

@@ -189,8 +189,9 @@ pub fn simulate(part: &Brep, program: &Program, tools: &ToolLibrary, cfg: &SimCo
     let t1 = Instant::now();
     let grid = stock.grid;
     let floor = blank.min.z as f32;
-    let (part_top, pw) = compare::part_heights(part, &grid, blank.min.z);
+    let (field, pw) = compare::part_heights(part, &grid, blank.min.z, cfg.tol);
     warnings.extend(pw);
+    let part_top = field.top.clone();
     let ideal = if rs.tools_used.is_empty() {
         part_top.clone()
     } else {
@@ -203,7 +204,7 @@ pub fn simulate(part: &Brep, program: &Program, tools: &ToolLibrary, cfg: &SimCo
         }
         best
     };
-    let classes = compare::classify(&stock.top, &part_top, &ideal, cfg.tol);
+    let classes = compare::classify(&stock.top, &field, &ideal, cfg.tol);
     let summary = |class| {
         let regs = compare::regions(&classes, class, &stock.top, &part_top, &stock.last_line, &grid);
         let cells: usize = regs.iter().map(|r| r.cells).sum();
