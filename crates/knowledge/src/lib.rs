@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 
 pub mod interference;
 pub mod load;
+pub mod methods;
 pub mod posts;
 pub mod recognition;
 pub mod resources;
@@ -24,6 +25,7 @@ pub mod strategies;
 
 pub use interference::*;
 pub use load::{load_ron, parse_ron, KnowledgeError};
+pub use methods::*;
 pub use posts::PostProcessor;
 pub use recognition::*;
 pub use resources::*;
@@ -54,16 +56,19 @@ pub struct Knowledge {
     pub strategies: StrategyKnowledge,
     /// Interference handling and remaining material (`interference.ron`).
     pub interference: InterferenceKnowledge,
+    /// Operation methods for the modular tool paths (`methods.ron`).
+    pub methods: MethodKnowledge,
 }
 
 /// Files at the knowledge root; each is required.
-pub const ROOT_FILES: [&str; 6] = [
+pub const ROOT_FILES: [&str; 7] = [
     SIZING_FILE,
     "recognition_walls.ron",
     "recognition_depressions.ron",
     SEQUENCING_FILE,
     STRATEGIES_FILE,
     INTERFERENCE_FILE,
+    METHODS_FILE,
 ];
 
 /// The embedded copy of the repository's `knowledge/` directory:
@@ -109,6 +114,10 @@ const BUILTIN: &[(&str, &str)] = &[
     (
         "interference.ron",
         include_str!("../../../knowledge/interference.ron"),
+    ),
+    (
+        "methods.ron",
+        include_str!("../../../knowledge/methods.ron"),
     ),
 ];
 
@@ -234,6 +243,7 @@ impl Knowledge {
             parse_root::<StrategyKnowledge>(&root, STRATEGIES_FILE, origin, &mut errors);
         let interference =
             parse_root::<InterferenceKnowledge>(&root, INTERFERENCE_FILE, origin, &mut errors);
+        let methods = parse_root::<MethodKnowledge>(&root, METHODS_FILE, origin, &mut errors);
         let (
             Some(sizing),
             Some(wall_recognition),
@@ -241,6 +251,7 @@ impl Knowledge {
             Some(sequencing),
             Some(strategies),
             Some(interference),
+            Some(methods),
         ) = (
             sizing,
             walls,
@@ -248,6 +259,7 @@ impl Knowledge {
             sequencing,
             strategies,
             interference,
+            methods,
         )
         else {
             return Err(errors);
@@ -265,6 +277,7 @@ impl Knowledge {
                 sequencing,
                 strategies,
                 interference,
+                methods,
             }),
             errors,
         };
@@ -481,6 +494,9 @@ fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
             "interference knowledge (interference.ron)",
             problem,
         ));
+    }
+    for problem in k.methods.problems() {
+        errors.push(invalid("method knowledge (methods.ron)", problem));
     }
     // Rules that name a strategy block must name one that exists.
     for r in &k.interference.keep_order {

@@ -1,0 +1,417 @@
+//! Operation method knowledge (thesis §4.3, §5.3.3, §6.3.3, table 6.1),
+//! read from `knowledge/methods.ron`.
+//!
+//! A method says how one machining feature is milled, chosen by the
+//! feature's adjacency: whether its bottom is product and on how many of its
+//! side edges it touches product (none: open, some: partially open, all:
+//! closed). It fixes the pattern, the tool rule, stepover and depth of cut per
+//! region (boundary / full cut / rest), mirrored alternating z-levels, the
+//! full-cut criterion, a separate product-adjacent bottom layer, the entry
+//! and the run-up to boundary passes. `thinplan-operations` applies it; every
+//! operation carries `methods.<method id>` as its provenance rule. This
+//! module is only the data and the checks on it.
+
+use std::collections::BTreeSet;
+
+use serde::{Deserialize, Serialize};
+
+/// The name of the methods file at the knowledge root.
+pub const METHODS_FILE: &str = "methods.ron";
+
+/// All operation methods plus the settings every method shares.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MethodKnowledge {
+    /// Spindle direction: with `Clockwise` (M3) down milling keeps the
+    /// material on the right of the tool's travel (cutter compensation G41).
+    pub spindle: SpindleDirection,
+    /// Links run this far (mm) above the top of the feature being cut.
+    pub safe_clearance: f64,
+    /// Feed moves that are not cutting (descending into a cleared level, a
+    /// lead-out) run at this fraction of the roughing feed.
+    pub link_feed_factor: f64,
+    /// A path junction turning more than this (degrees) is a corner where the
+    /// time model brings the feed to zero.
+    pub corner_angle_deg: f64,
+    /// The methods, tried in order: the first whose `applies` matches a
+    /// feature is used.
+    pub methods: Vec<Method>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SpindleDirection {
+    /// M3.
+    Clockwise,
+    /// M4.
+    CounterClockwise,
+}
+
+/// One operation method.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Method {
+    pub id: String,
+    pub applies: Applies,
+    /// The pattern of the rest region.
+    pub pattern: Pattern,
+    pub tool: ToolRule,
+    /// The boundary region along product edges (reduced stepover, down
+    /// milling, run-up); `None`: no boundary passes (only sensible when the
+    /// method applies to features without product sides).
+    pub boundary: Option<BoundaryRegion>,
+    /// The rest region: roughing conditions.
+    pub rest: RestRegion,
+    pub full_cut: FullCut,
+    pub mirror_layers: MirrorLayers,
+    /// A separate layer at a product floor with finishing conditions.
+    pub bottom_layer: Option<BottomLayer>,
+    pub entry: LevelEntry,
+    /// How far the tool may reach beyond non-product edges.
+    pub overhang: Overhang,
+    /// Radius (fraction of D) with which the sharp turns of the rest pattern
+    /// are rounded.
+    pub corner_rounding: f64,
+    #[serde(default)]
+    pub note: String,
+}
+
+/// Which features a method is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Applies {
+    pub bottom: BottomMatch,
+    pub sides: SidesMatch,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum BottomMatch {
+    /// The bottom is product (a floor to finish).
+    Product,
+    /// The bottom is open or another feature.
+    NotProduct,
+    Any,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum SidesMatch {
+    /// No side edge is product.
+    Open,
+    /// Some, not all, side edges are product.
+    PartiallyOpen,
+    /// Every side edge is product (a pocket); no open side to enter from.
+    Closed,
+    Any,
+}
+
+impl BottomMatch {
+    pub fn matches(self, bottom_is_product: bool) -> bool {
+        match self {
+            BottomMatch::Product => bottom_is_product,
+            BottomMatch::NotProduct => !bottom_is_product,
+            BottomMatch::Any => true,
+        }
+    }
+}
+
+impl SidesMatch {
+    pub fn matches(self, sides: SidesMatch) -> bool {
+        self == SidesMatch::Any || self == sides
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Pattern {
+    /// Parallel side passes, alternating direction.
+    ZigZag,
+    /// Parallel side passes, all in one direction, returning at safe height.
+    OneWay,
+    /// Parallel offsets of the pocket (closed profiles).
+    OffsetSpiral,
+    /// Bieterman & Sandstrom's curvilinear spiral (closed profiles; falls
+    /// back to offsets where it cannot be built).
+    CurvilinearSpiral,
+}
+
+impl Pattern {
+    pub fn is_spiral(self) -> bool {
+        matches!(self, Pattern::OffsetSpiral | Pattern::CurvilinearSpiral)
+    }
+}
+
+/// Which tool of the set-up's tool set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolRule {
+    /// The largest tool whose tool-centre region is not empty (it fits).
+    pub choice: ToolChoice,
+    /// When the feature has concave product corners of radius ρ, only tools
+    /// with radius ≤ `corner_ratio`·ρ are used (§6.3.3: a tool smaller than
+    /// the smallest corner, so the boundary pass has no sharp corners).
+    /// `None`: corners are not considered.
+    pub corner_ratio: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ToolChoice {
+    LargestThatFits,
+    SmallestThatFits,
+}
+
+/// The boundary region: passes along product edges at exactly the tool
+/// radius from them, down milling.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundaryRegion {
+    /// Width of cut of the boundary pass (fraction of D); the rest region
+    /// stops this far from it.
+    pub stepover: f64,
+    /// Largest depth of cut of a boundary pass (fraction of D); a z-level
+    /// deeper than this gets stacked boundary passes.
+    pub depth: f64,
+    pub run_up: RunUp,
+    /// Finishing cutting conditions (feed per tooth) on the boundary passes.
+    pub finishing: bool,
+}
+
+/// The run-up to a boundary pass (figure 4.17).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum RunUp {
+    /// A straight lead-in along the pass's tangent, `length` a fraction of D.
+    Tangential { length: f64 },
+    /// A quarter circle from the cleared side, `radius` a fraction of D.
+    Circular { radius: f64 },
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RestRegion {
+    /// Largest stepover (fraction of D); the passes are spread evenly.
+    pub stepover: f64,
+    /// Largest depth of cut (fraction of D, also capped by the flute length).
+    pub depth: f64,
+}
+
+/// When z-levels get a full-cut (slot) pass, with reduced depth (§4.3.4).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum FullCut {
+    Never,
+    /// Every z-level starts with a full cut (closed profiles and slots):
+    /// its depth is the rest depth times `depth_factor`.
+    Always {
+        depth_factor: f64,
+    },
+    /// §6.3.3: with product sides and an odd number of side passes,
+    /// alternating layers need a full cut in every second layer; applied only
+    /// when that gives fewer side passes in total than the alternative.
+    WhenFewerSidePasses {
+        depth_factor: f64,
+    },
+}
+
+/// Mirrored alternating z-levels (figure 4.22).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MirrorLayers {
+    Never,
+    /// When a z-level ends away from where it started (an odd number of
+    /// side passes), the next one runs it backwards.
+    WhenOddPasses,
+    Always,
+}
+
+/// A separate layer at a product floor (§6.3.1: its own operation).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BottomLayer {
+    /// Thickness of the layer (mm) left above the floor by the other layers.
+    pub thickness: f64,
+    /// Stepover of its passes (fraction of D).
+    pub stepover: f64,
+    /// Its pattern: one-way keeps every pass down milling.
+    pub pattern: Pattern,
+}
+
+/// How the tool gets down to a z-level: never an axial plunge.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum LevelEntry {
+    /// Ramping along the first pass (back and forth where it is short).
+    Ramp { angle_deg: f64 },
+    /// A helix of `radius` (fraction of D) where it fits, otherwise a ramp
+    /// at the same angle.
+    Helix { angle_deg: f64, radius: f64 },
+}
+
+impl LevelEntry {
+    pub fn angle_deg(self) -> f64 {
+        match self {
+            LevelEntry::Ramp { angle_deg } | LevelEntry::Helix { angle_deg, .. } => angle_deg,
+        }
+    }
+}
+
+/// How far (fraction of D) the tool's cutting edge may pass beyond an edge
+/// that is not product (product edges: never, 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Overhang {
+    /// Beyond open edges (air or already removed).
+    pub open: f64,
+    /// Into a neighbouring machining feature not yet removed (at most ½).
+    pub feature: f64,
+}
+
+impl MethodKnowledge {
+    /// The first method that applies to a feature.
+    pub fn for_feature(&self, bottom_is_product: bool, sides: SidesMatch) -> Option<&Method> {
+        self.methods
+            .iter()
+            .find(|m| m.applies.bottom.matches(bottom_is_product) && m.applies.sides.matches(sides))
+    }
+
+    /// Problems a parser cannot find: duplicate ids, combinations no method
+    /// covers, numbers out of range, patterns that cannot serve the sides.
+    pub fn problems(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let frac = |out: &mut Vec<String>, id: &str, name: &str, v: f64, hi: f64| {
+            if !(v.is_finite() && v > 0.0 && v <= hi) {
+                out.push(format!("method `{id}`: {name} {v} must lie in (0, {hi}]"));
+            }
+        };
+        if !(self.safe_clearance.is_finite() && self.safe_clearance > 0.0) {
+            out.push(format!(
+                "safe_clearance {} must be positive",
+                self.safe_clearance
+            ));
+        }
+        if !(self.link_feed_factor.is_finite() && self.link_feed_factor > 0.0) {
+            out.push(format!(
+                "link_feed_factor {} must be positive",
+                self.link_feed_factor
+            ));
+        }
+        if !(self.corner_angle_deg.is_finite() && (0.0..=180.0).contains(&self.corner_angle_deg)) {
+            out.push(format!(
+                "corner_angle_deg {} is outside 0..=180",
+                self.corner_angle_deg
+            ));
+        }
+        let mut ids = BTreeSet::new();
+        for (i, m) in self.methods.iter().enumerate() {
+            let id = if m.id.is_empty() {
+                out.push(format!("method #{} has an empty id", i + 1));
+                format!("#{}", i + 1)
+            } else {
+                m.id.clone()
+            };
+            if !m.id.is_empty() && !ids.insert(m.id.as_str()) {
+                out.push(format!("method `{id}`: duplicate id"));
+            }
+            let id = id.as_str();
+            frac(&mut out, id, "rest.stepover", m.rest.stepover, 1.0);
+            frac(&mut out, id, "rest.depth", m.rest.depth, 10.0);
+            if let Some(b) = &m.boundary {
+                frac(&mut out, id, "boundary.stepover", b.stepover, 0.5);
+                frac(&mut out, id, "boundary.depth", b.depth, 10.0);
+                match b.run_up {
+                    RunUp::Tangential { length } => {
+                        frac(&mut out, id, "run_up length", length, 10.0)
+                    }
+                    RunUp::Circular { radius } => frac(&mut out, id, "run_up radius", radius, 10.0),
+                }
+            } else if matches!(
+                m.applies.sides,
+                SidesMatch::PartiallyOpen | SidesMatch::Closed | SidesMatch::Any
+            ) {
+                out.push(format!(
+                    "method `{id}`: applies to features with product sides but has no boundary \
+                     region (product edges would be finished with roughing conditions)"
+                ));
+            }
+            match m.full_cut {
+                FullCut::Never => {}
+                FullCut::Always { depth_factor }
+                | FullCut::WhenFewerSidePasses { depth_factor } => {
+                    frac(&mut out, id, "full_cut depth_factor", depth_factor, 1.0)
+                }
+            }
+            if let Some(b) = &m.bottom_layer {
+                if !(b.thickness.is_finite() && b.thickness > 0.0) {
+                    out.push(format!(
+                        "method `{id}`: bottom_layer thickness {} must be positive",
+                        b.thickness
+                    ));
+                }
+                frac(&mut out, id, "bottom_layer stepover", b.stepover, 1.0);
+                if b.pattern.is_spiral() != m.pattern.is_spiral() {
+                    out.push(format!(
+                        "method `{id}`: bottom_layer pattern {:?} must be of the same family \
+                         (spiral or parallel passes) as the method's {:?}",
+                        b.pattern, m.pattern
+                    ));
+                }
+            } else if m.applies.bottom == BottomMatch::Product {
+                out.push(format!(
+                    "method `{id}`: applies to product floors but has no bottom_layer"
+                ));
+            }
+            let a = m.entry.angle_deg();
+            if !(a.is_finite() && a > 0.0 && a <= 45.0) {
+                out.push(format!(
+                    "method `{id}`: entry angle {a}° must lie in (0, 45] (no plunges)"
+                ));
+            }
+            if let LevelEntry::Helix { radius, .. } = m.entry {
+                frac(&mut out, id, "helix radius", radius, 5.0);
+            }
+            if !(m.overhang.open.is_finite() && m.overhang.open >= 0.0) {
+                out.push(format!(
+                    "method `{id}`: overhang.open {} must be ≥ 0",
+                    m.overhang.open
+                ));
+            }
+            if !(m.overhang.feature.is_finite() && (0.0..=0.5).contains(&m.overhang.feature)) {
+                out.push(format!(
+                    "method `{id}`: overhang.feature {} must lie in 0..=0.5 (never more than \
+                     half the tool into a neighbouring feature)",
+                    m.overhang.feature
+                ));
+            }
+            if let Some(c) = m.tool.corner_ratio {
+                frac(&mut out, id, "tool.corner_ratio", c, 1.0);
+            }
+            if !(m.corner_rounding.is_finite() && (0.0..=0.5).contains(&m.corner_rounding)) {
+                out.push(format!(
+                    "method `{id}`: corner_rounding {} must lie in 0..=0.5",
+                    m.corner_rounding
+                ));
+            }
+            if m.pattern.is_spiral() && m.applies.sides != SidesMatch::Closed {
+                out.push(format!(
+                    "method `{id}`: spiral patterns need a closed profile (sides: Closed)"
+                ));
+            }
+            if m.applies.sides == SidesMatch::Closed && !m.pattern.is_spiral() {
+                out.push(format!(
+                    "method `{id}`: a closed profile has no open side to run parallel passes \
+                     out of; use OffsetSpiral or CurvilinearSpiral"
+                ));
+            }
+        }
+        // Every feature must find a method.
+        for bottom in [true, false] {
+            for sides in [
+                SidesMatch::Open,
+                SidesMatch::PartiallyOpen,
+                SidesMatch::Closed,
+            ] {
+                if self.for_feature(bottom, sides).is_none() {
+                    out.push(format!(
+                        "no method applies to features with {} bottom and {:?} sides",
+                        if bottom { "a product" } else { "a non-product" },
+                        sides
+                    ));
+                }
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,431 @@
+//! 2D geometry in a feature's frame: edges with their adjacency, the
+//! tool-centre region (cavalier_contours offsets, true arcs kept), sampling
+//! and distances.
+
+use cavalier_contours::polyline::{
+    seg_arc_radius_and_center, PlineCreation, PlineSource, PlineSourceMut, PlineVertex, Polyline,
+};
+use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
+use glam::DVec2;
+use thinplan_plan::{Adjacency, ProfileLoop};
+
+/// One profile edge: from `a` to `b`, straight (`bulge` 0) or a true arc.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Edge2 {
+    pub a: DVec2,
+    pub b: DVec2,
+    pub bulge: f64,
+}
+
+impl Edge2 {
+    /// Arc radius and centre, `None` for a straight edge.
+    pub fn arc(&self) -> Option<(f64, DVec2)> {
+        if self.bulge.abs() < 1e-12 {
+            return None;
+        }
+        let (r, c) = seg_arc_radius_and_center(
+            PlineVertex::new(self.a.x, self.a.y, self.bulge),
+            PlineVertex::new(self.b.x, self.b.y, 0.0),
+        );
+        Some((r, DVec2::new(c.x, c.y)))
+    }
+
+    pub fn length(&self) -> f64 {
+        match self.arc() {
+            None => self.a.distance(self.b),
+            Some((r, _)) => r * (4.0 * self.bulge.atan()).abs(),
+        }
+    }
+
+    /// Distance from `p` to the edge.
+    pub fn distance(&self, p: DVec2) -> f64 {
+        match self.arc() {
+            None => dist_point_seg(p, self.a, self.b),
+            Some((r, c)) => {
+                let sweep = 4.0 * self.bulge.atan();
+                let a0 = (self.a - c).to_angle();
+                let ang = (p - c).to_angle();
+                // Angle of p measured from a0 in the sweep's sense.
+                let mut t = (ang - a0) * sweep.signum();
+                t = t.rem_euclid(std::f64::consts::TAU);
+                if t <= sweep.abs() {
+                    ((p - c).length() - r).abs()
+                } else {
+                    p.distance(self.a).min(p.distance(self.b))
+                }
+            }
+        }
+    }
+
+    /// Points along the edge, no chord longer than `step` (end points included).
+    pub fn sample(&self, step: f64) -> Vec<DVec2> {
+        match self.arc() {
+            None => {
+                let k = (self.a.distance(self.b) / step).ceil().max(1.0) as usize;
+                (0..=k)
+                    .map(|j| self.a.lerp(self.b, j as f64 / k as f64))
+                    .collect()
+            }
+            Some((r, c)) => {
+                let sweep = 4.0 * self.bulge.atan();
+                let a0 = (self.a - c).to_angle();
+                let k = (r * sweep.abs() / step).ceil().max(2.0) as usize;
+                (0..=k)
+                    .map(|j| c + r * DVec2::from_angle(a0 + sweep * j as f64 / k as f64))
+                    .collect()
+            }
+        }
+    }
+
+    /// Unit tangent at the start and at the end.
+    pub fn tangents(&self) -> (DVec2, DVec2) {
+        match self.arc() {
+            None => {
+                let t = (self.b - self.a).normalize_or_zero();
+                (t, t)
+            }
+            Some((_, c)) => {
+                let s = self.bulge.signum();
+                let ta = (self.a - c).perp() * s;
+                let tb = (self.b - c).perp() * s;
+                (ta.normalize_or_zero(), tb.normalize_or_zero())
+            }
+        }
+    }
+
+    pub fn midpoint(&self) -> DVec2 {
+        match self.arc() {
+            None => (self.a + self.b) * 0.5,
+            Some((r, c)) => {
+                let sweep = 4.0 * self.bulge.atan();
+                c + r * DVec2::from_angle((self.a - c).to_angle() + sweep * 0.5)
+            }
+        }
+    }
+}
+
+pub fn dist_point_seg(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let ab = b - a;
+    let l2 = ab.length_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + ab * t)
+}
+
+/// The edges of a closed profile loop.
+pub fn loop_edges(l: &ProfileLoop) -> Vec<Edge2> {
+    let n = l.vertices.len();
+    (0..n)
+        .map(|i| {
+            let v = &l.vertices[i];
+            let w = &l.vertices[(i + 1) % n];
+            Edge2 {
+                a: DVec2::new(v.x, v.y),
+                b: DVec2::new(w.x, w.y),
+                bulge: v.bulge,
+            }
+        })
+        .collect()
+}
+
+pub fn pline_from_edges(edges: &[Edge2], closed: bool) -> Polyline<f64> {
+    let mut p = Polyline::with_capacity(edges.len() + 1, closed);
+    for e in edges {
+        p.add(e.a.x, e.a.y, e.bulge);
+    }
+    if !closed {
+        if let Some(e) = edges.last() {
+            p.add(e.b.x, e.b.y, 0.0);
+        }
+    }
+    p
+}
+
+pub fn edges_of_pline(p: &Polyline<f64>) -> Vec<Edge2> {
+    let n = p.vertex_count();
+    let m = if p.is_closed() {
+        n
+    } else {
+        n.saturating_sub(1)
+    };
+    (0..m)
+        .map(|i| {
+            let v = p.at(i);
+            let w = p.at((i + 1) % n);
+            Edge2 {
+                a: DVec2::new(v.x, v.y),
+                b: DVec2::new(w.x, w.y),
+                bulge: v.bulge,
+            }
+        })
+        .filter(|e| e.a.distance_squared(e.b) > 1e-18)
+        .collect()
+}
+
+/// A loop with every edge moved outward (to the right of travel: away from
+/// the region for a counter-clockwise outer loop and a clockwise hole) by its
+/// own distance. Straight neighbours meet at their lines' intersection (so a
+/// product edge is extended along its own line); elsewhere a straight join.
+pub fn move_edges(edges: &[Edge2], out: &[f64]) -> Vec<Edge2> {
+    let n = edges.len();
+    let moved: Vec<Edge2> = edges
+        .iter()
+        .zip(out)
+        .map(|(e, &d)| {
+            if d == 0.0 {
+                return *e;
+            }
+            match e.arc() {
+                None => {
+                    let nrm = -(e.b - e.a).normalize_or_zero().perp();
+                    Edge2 {
+                        a: e.a + nrm * d,
+                        b: e.b + nrm * d,
+                        bulge: 0.0,
+                    }
+                }
+                Some((r, c)) => {
+                    // Counter-clockwise arc: centre on the left, outward grows it.
+                    let nr = if e.bulge > 0.0 { r + d } else { r - d };
+                    if nr <= 1e-6 {
+                        let nrm = -(e.b - e.a).normalize_or_zero().perp();
+                        return Edge2 {
+                            a: e.a + nrm * d,
+                            b: e.b + nrm * d,
+                            bulge: 0.0,
+                        };
+                    }
+                    Edge2 {
+                        a: c + (e.a - c) * (nr / r),
+                        b: c + (e.b - c) * (nr / r),
+                        bulge: e.bulge,
+                    }
+                }
+            }
+        })
+        .collect();
+    let mut res: Vec<Edge2> = Vec::with_capacity(2 * n);
+    // Start point of each moved edge after joining with its predecessor,
+    // and an optional join segment before it.
+    let mut starts = vec![DVec2::ZERO; n];
+    let mut joins: Vec<Option<DVec2>> = vec![None; n];
+    for i in 0..n {
+        let p = &moved[(i + n - 1) % n];
+        let q = &moved[i];
+        let (op, oq) = (out[(i + n - 1) % n], out[i]);
+        if op == 0.0 && oq == 0.0 {
+            starts[i] = q.a;
+            continue;
+        }
+        let straight = p.bulge == 0.0 && q.bulge == 0.0;
+        let d1 = p.b - p.a;
+        let d2 = q.b - q.a;
+        let cr = d1.perp_dot(d2);
+        let reach = op.max(oq);
+        if straight && cr.abs() > 1e-9 * d1.length() * d2.length() {
+            let t = (q.a - p.a).perp_dot(d2) / cr;
+            let x = p.a + d1 * t;
+            // A mitre reaching far beyond the corner is replaced by a join.
+            if x.distance(edges[i].a) <= 4.0 * reach + 1e-9 {
+                starts[i] = x;
+                continue;
+            }
+        }
+        starts[i] = q.a;
+        if p.b.distance_squared(q.a) > 1e-18 {
+            joins[i] = Some(p.b);
+        }
+    }
+    for i in 0..n {
+        if let Some(j) = joins[i] {
+            res.push(Edge2 {
+                a: j,
+                b: starts[i],
+                bulge: 0.0,
+            });
+        }
+        let end = match joins[(i + 1) % n] {
+            Some(j) => j,
+            None => starts[(i + 1) % n],
+        };
+        res.push(Edge2 {
+            a: starts[i],
+            b: end,
+            bulge: moved[i].bulge,
+        });
+    }
+    res.retain(|e| e.a.distance_squared(e.b) > 1e-18);
+    res
+}
+
+/// A planar area: outer loops (counter-clockwise) each with its holes (clockwise).
+#[derive(Debug, Clone, Default)]
+pub struct Area {
+    pub parts: Vec<(Polyline<f64>, Vec<Polyline<f64>>)>,
+}
+
+impl Area {
+    pub fn is_empty(&self) -> bool {
+        self.parts.is_empty()
+    }
+
+    pub fn from_shape(shape: Shape<f64>) -> Area {
+        let keep = |p: &Polyline<f64>| p.vertex_count() >= 2 && p.area().abs() > 1e-9;
+        let mut parts: Vec<(Polyline<f64>, Vec<Polyline<f64>>)> = shape
+            .ccw_plines
+            .into_iter()
+            .map(|ip| ip.polyline)
+            .filter(keep)
+            .map(|p| (p, Vec::new()))
+            .collect();
+        for h in shape
+            .cw_plines
+            .into_iter()
+            .map(|ip| ip.polyline)
+            .filter(keep)
+        {
+            let v = h.at(0);
+            let pt = cavalier_contours::core::math::Vector2::new(v.x, v.y);
+            // The smallest outer loop that contains the hole owns it.
+            let owner = parts
+                .iter()
+                .enumerate()
+                .filter(|(_, (o, _))| o.winding_number(pt) != 0)
+                .min_by(|a, b| a.1 .0.area().abs().total_cmp(&b.1 .0.area().abs()))
+                .map(|(i, _)| i);
+            if let Some(i) = owner {
+                parts[i].1.push(h);
+            }
+        }
+        parts.sort_by(|a, b| {
+            let ea =
+                a.0.extents()
+                    .map(|e| (e.min_x, e.min_y))
+                    .unwrap_or_default();
+            let eb =
+                b.0.extents()
+                    .map(|e| (e.min_x, e.min_y))
+                    .unwrap_or_default();
+            ea.partial_cmp(&eb).unwrap_or(std::cmp::Ordering::Equal)
+        });
+        Area { parts }
+    }
+
+    /// Inward offset by `d` (islands grow).
+    pub fn offset(&self, d: f64) -> Area {
+        let mut out = Area::default();
+        for (o, hs) in &self.parts {
+            let mut all = vec![o.clone()];
+            all.extend(hs.iter().cloned());
+            let shape = Shape::from_plines(all);
+            let off = shape.parallel_offset(d, &ShapeOffsetOptions::default());
+            out.parts.extend(Area::from_shape(off).parts);
+        }
+        out
+    }
+
+    /// All loops with their orientation kept (outer ccw, holes cw).
+    pub fn loops(&self) -> Vec<&Polyline<f64>> {
+        let mut v = Vec::new();
+        for (o, hs) in &self.parts {
+            v.push(o);
+            v.extend(hs.iter());
+        }
+        v
+    }
+
+    /// The loops sampled into polygons (for containment and scan lines).
+    pub fn polygons(&self, step: f64) -> Vec<Vec<DVec2>> {
+        self.loops()
+            .into_iter()
+            .map(|p| {
+                let mut pts = Vec::new();
+                for e in edges_of_pline(p) {
+                    let s = e.sample(step);
+                    pts.extend_from_slice(&s[..s.len() - 1]);
+                }
+                pts
+            })
+            .filter(|p| p.len() >= 3)
+            .collect()
+    }
+}
+
+/// Even-odd containment in a set of polygons.
+pub fn inside(p: DVec2, polys: &[Vec<DVec2>]) -> bool {
+    let mut c = false;
+    for pts in polys {
+        let n = pts.len();
+        let mut j = n - 1;
+        for i in 0..n {
+            let (a, b) = (pts[i], pts[j]);
+            if (a.y > p.y) != (b.y > p.y) {
+                let x = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
+                if p.x < x {
+                    c = !c;
+                }
+            }
+            j = i;
+        }
+    }
+    c
+}
+
+/// Distance from `p` to the nearest polygon edge.
+pub fn boundary_distance(p: DVec2, polys: &[Vec<DVec2>]) -> f64 {
+    let mut d = f64::INFINITY;
+    for pts in polys {
+        let n = pts.len();
+        for i in 0..n {
+            d = d.min(dist_point_seg(p, pts[i], pts[(i + 1) % n]));
+        }
+    }
+    d
+}
+
+/// Whether the segment a→b stays inside (sampled every `step`).
+pub fn segment_inside(a: DVec2, b: DVec2, polys: &[Vec<DVec2>], step: f64) -> bool {
+    let k = (a.distance(b) / step).ceil().max(1.0) as usize;
+    (0..=k).all(|j| inside(a.lerp(b, j as f64 / k as f64), polys))
+}
+
+/// Edges of a feature's region with their adjacency: the outer loop's from
+/// `side_adjacency`, the holes' from `hole_adjacency` (product where missing).
+pub fn adjacency_edges(
+    region: &thinplan_plan::Region,
+    side: &[Adjacency],
+    holes: &[Vec<Adjacency>],
+) -> Vec<(Vec<Edge2>, Vec<Adjacency>)> {
+    let mut v = Vec::new();
+    let outer = loop_edges(&region.outer);
+    let adj = (0..outer.len())
+        .map(|i| side.get(i).copied().unwrap_or(Adjacency::Product))
+        .collect();
+    v.push((outer, adj));
+    for (h, l) in region.holes.iter().enumerate() {
+        let e = loop_edges(l);
+        let adj = (0..e.len())
+            .map(|i| {
+                holes
+                    .get(h)
+                    .and_then(|a| a.get(i))
+                    .copied()
+                    .unwrap_or(Adjacency::Product)
+            })
+            .collect();
+        v.push((e, adj));
+    }
+    v
+}
+
+/// Makes a loop's orientation counter-clockwise (`ccw`) or clockwise.
+pub fn oriented(mut p: Polyline<f64>, ccw: bool) -> Polyline<f64> {
+    let is_ccw = p.area() > 0.0;
+    if is_ccw != ccw {
+        p.invert_direction_mut();
+    }
+    p
+}

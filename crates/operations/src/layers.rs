@@ -1,0 +1,1219 @@
+//! The modular pattern of one machining feature: method and tool choice,
+//! the tool-centre region, z-levels, rest passes, boundary passes, entries.
+
+use cavalier_contours::polyline::PlineSource;
+use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
+use glam::{DVec2, DVec3};
+use thinplan_knowledge::{
+    FullCut, Knowledge, LevelEntry, Machine, Material, Method, MirrorLayers, Pattern, RunUp,
+    SidesMatch, SpindleDirection, Tool, ToolChoice, ToolSet,
+};
+use thinplan_plan::{Adjacency, MachiningFeature, Provenance, ProvenanceSource};
+
+use crate::geom::{
+    adjacency_edges, boundary_distance, edges_of_pline, inside, move_edges, oriented,
+    pline_from_edges, segment_inside, Area, Edge2,
+};
+use crate::path::{helix, ramp, rounded, seg_points, Builder, Kind, LMove, Seg2, Space};
+
+pub(crate) struct Env<'a> {
+    pub k: &'a Knowledge,
+    pub tools: &'a ToolSet,
+    pub material: &'a Material,
+    pub machine: &'a Machine,
+    pub limits: thinplan_feeds::MachineLimits,
+    pub global_top: f64,
+}
+
+/// An operation in the feature's local frame.
+pub(crate) struct LocalOp {
+    pub method: String,
+    pub tool: String,
+    pub rpm: f64,
+    pub feed_rough: f64,
+    pub feed_finish: f64,
+    pub feed_boundary: f64,
+    pub feed_link: f64,
+    pub start: DVec3,
+    pub moves: Vec<LMove>,
+    pub provenance: Provenance,
+}
+
+pub(crate) struct Made {
+    pub ops: Vec<LocalOp>,
+    pub warnings: Vec<String>,
+}
+
+/// Sampling step (mm) for containment checks and polygons.
+const STEP: f64 = 0.25;
+/// Distance slack for "on the product offset" (mm).
+const EPS: f64 = 1e-6;
+
+/// The geometry of a feature for one tool.
+struct Geometry {
+    r: f64,
+    /// Tool-centre region and its sampled polygons.
+    centre: Area,
+    centre_polys: Vec<Vec<DVec2>>,
+    /// The feature region itself, sampled.
+    region_polys: Vec<Vec<DVec2>>,
+    product: Vec<Edge2>,
+}
+
+fn sides_class(edges: &[(Vec<Edge2>, Vec<Adjacency>)]) -> SidesMatch {
+    let all: Vec<Adjacency> = edges.iter().flat_map(|(_, a)| a.iter().copied()).collect();
+    let p = all.iter().filter(|a| **a == Adjacency::Product).count();
+    if p == 0 {
+        SidesMatch::Open
+    } else if p == all.len() {
+        SidesMatch::Closed
+    } else {
+        SidesMatch::PartiallyOpen
+    }
+}
+
+/// Smallest concave product corner radius: product arcs whose centre lies on
+/// the region's side, and sharp convex vertices between two product edges.
+fn smallest_product_corner(edges: &[(Vec<Edge2>, Vec<Adjacency>)]) -> Option<f64> {
+    let mut best: Option<f64> = None;
+    let mut note = |v: f64| best = Some(best.map_or(v, |b: f64| b.min(v)));
+    for (es, adj) in edges {
+        let n = es.len();
+        for i in 0..n {
+            if adj[i] != Adjacency::Product {
+                continue;
+            }
+            // The region lies left of every edge (ccw outer, cw holes).
+            if let Some((r, _)) = es[i].arc() {
+                if es[i].bulge > 0.0 {
+                    note(r);
+                }
+            }
+            let j = (i + 1) % n;
+            if adj[j] == Adjacency::Product {
+                let t1 = es[i].tangents().1;
+                let t2 = es[j].tangents().0;
+                if t1.perp_dot(t2) > 1e-6 {
+                    note(0.0);
+                }
+            }
+        }
+    }
+    best
+}
+
+fn geometry(f: &MachiningFeature, m: &Method, tool: &Tool) -> Option<Geometry> {
+    let d = tool.diameter;
+    let r = d / 2.0;
+    let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
+    let mut product = Vec::new();
+    let mut loops = Vec::new();
+    for (k, (es, adj)) in edges.iter().enumerate() {
+        // Tool edge may pass `overhang·D` beyond a non-product edge: the
+        // loop is moved out by that, then the whole offset in by r.
+        let out: Vec<f64> = adj
+            .iter()
+            .map(|a| match a {
+                Adjacency::Product => 0.0,
+                Adjacency::Open => m.overhang.open * d,
+                Adjacency::Feature => m.overhang.feature * d,
+            })
+            .collect();
+        for (e, a) in es.iter().zip(adj) {
+            if *a == Adjacency::Product {
+                product.push(*e);
+            }
+        }
+        let moved = move_edges(es, &out);
+        if moved.len() < 2 {
+            continue;
+        }
+        let pl = pline_from_edges(&moved, true);
+        if pl.area().abs() < 1e-9 {
+            continue;
+        }
+        // A hole moved out past itself vanished (it was all non-product).
+        let expect_ccw = k == 0;
+        if (pl.area() > 0.0) != expect_ccw {
+            if k == 0 {
+                return None;
+            }
+            continue;
+        }
+        loops.push(oriented(pl, expect_ccw));
+    }
+    if loops.is_empty() {
+        return None;
+    }
+    let shape = Shape::from_plines(loops);
+    let centre = Area::from_shape(shape.parallel_offset(r, &ShapeOffsetOptions::default()));
+    if centre.is_empty() {
+        return None;
+    }
+    let centre_polys = centre.polygons(STEP);
+    let mut region_loops = vec![pline_from_edges(&edges[0].0, true)];
+    for (es, _) in &edges[1..] {
+        region_loops.push(pline_from_edges(es, true));
+    }
+    let region_polys = Area {
+        parts: vec![(region_loops[0].clone(), region_loops[1..].to_vec())],
+    }
+    .polygons(STEP);
+    Some(Geometry {
+        r,
+        centre,
+        centre_polys,
+        region_polys,
+        product,
+    })
+}
+
+fn product_distance(p: DVec2, product: &[Edge2]) -> f64 {
+    product
+        .iter()
+        .map(|e| e.distance(p))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The boundary passes: the product-adjacent stretches of the tool-centre
+/// region's loops, in down-milling direction.
+fn boundary_chains(g: &Geometry, band: f64, spindle: SpindleDirection) -> Vec<(Vec<Edge2>, bool)> {
+    let mut chains = Vec::new();
+    for lp in g.centre.loops() {
+        let es = edges_of_pline(lp);
+        let n = es.len();
+        if n == 0 {
+            continue;
+        }
+        let adj: Vec<bool> = es
+            .iter()
+            .map(|e| product_distance(e.midpoint(), &g.product) <= g.r + band)
+            .collect();
+        let mut found: Vec<(Vec<Edge2>, bool)> = Vec::new();
+        if adj.iter().all(|a| *a) {
+            found.push((es.clone(), true));
+        } else if adj.iter().any(|a| *a) {
+            // Start after a non-adjacent edge so no chain wraps.
+            let s = (0..n).find(|&i| !adj[i]).unwrap_or(0);
+            let mut cur: Vec<Edge2> = Vec::new();
+            for k in 1..=n {
+                let i = (s + k) % n;
+                if adj[i] {
+                    cur.push(es[i]);
+                } else if !cur.is_empty() {
+                    found.push((std::mem::take(&mut cur), false));
+                }
+            }
+            if !cur.is_empty() {
+                found.push((cur, false));
+            }
+        }
+        for (mut c, closed) in found {
+            // Loops keep cavalier's orientation: product on the right, which
+            // is down milling with a clockwise (M3) spindle.
+            if spindle == SpindleDirection::CounterClockwise {
+                c = c
+                    .iter()
+                    .rev()
+                    .map(|e| Edge2 {
+                        a: e.b,
+                        b: e.a,
+                        bulge: -e.bulge,
+                    })
+                    .collect();
+            }
+            if closed {
+                c = start_mid_longest(c);
+            }
+            chains.push((c, closed));
+        }
+    }
+    chains
+}
+
+/// A closed chain restarted in the middle of its longest straight edge, so
+/// the run-up meets it on a straight.
+fn start_mid_longest(c: Vec<Edge2>) -> Vec<Edge2> {
+    let Some((i, _)) = c
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| e.bulge == 0.0)
+        .max_by(|a, b| a.1.length().total_cmp(&b.1.length()))
+    else {
+        return c;
+    };
+    let e = c[i];
+    let m = (e.a + e.b) * 0.5;
+    let mut out = vec![Edge2 {
+        a: m,
+        b: e.b,
+        bulge: 0.0,
+    }];
+    for k in 1..c.len() {
+        out.push(c[(i + k) % c.len()]);
+    }
+    out.push(Edge2 {
+        a: e.a,
+        b: m,
+        bulge: 0.0,
+    });
+    out
+}
+
+fn chain_segs(c: &[Edge2]) -> Vec<Seg2> {
+    c.iter()
+        .map(|e| Seg2 {
+            to: e.b,
+            arc: e.arc().map(|(_, centre)| (centre, e.bulge > 0.0)),
+        })
+        .collect()
+}
+
+/// A boundary pass with its run-up and run-off: (start point, segments).
+struct BoundaryPass {
+    start: DVec2,
+    segs: Vec<Seg2>,
+    lead_in: &'static str,
+}
+
+fn arc_ok(from: DVec2, s: &Seg2, g: &Geometry, cleared: &[Vec<DVec2>]) -> bool {
+    seg_points(from, s, STEP)
+        .iter()
+        .chain(std::iter::once(&from))
+        .all(|p| inside(*p, cleared) && product_distance(*p, &g.product) >= g.r - EPS)
+}
+
+fn boundary_pass(
+    chain: &[Edge2],
+    g: &Geometry,
+    run_up: RunUp,
+    d: f64,
+    cleared: &[Vec<DVec2>],
+) -> BoundaryPass {
+    let p0 = chain[0].a;
+    let t0 = chain[0].tangents().0;
+    let pe = chain[chain.len() - 1].b;
+    let te = chain[chain.len() - 1].tangents().1;
+    let mut segs = Vec::new();
+    let mut start = p0;
+    let mut lead_in = "from-open-side";
+    // A pass starting outside the region starts in air beyond an open edge:
+    // its own first stretch is the tangential run-up.
+    if inside(p0, &g.region_polys) {
+        lead_in = "none";
+        let mut tries: Vec<(f64, bool)> = Vec::new();
+        match run_up {
+            RunUp::Circular { radius } => {
+                for s in [1.0, 0.5, 0.25] {
+                    tries.push((radius * d * s, true));
+                }
+                tries.push((radius * d, false));
+            }
+            RunUp::Tangential { length } => {
+                for s in [1.0, 0.5, 0.25] {
+                    tries.push((length * d * s, false));
+                }
+            }
+        }
+        for (rho, circular) in tries {
+            let (s, seg) = if circular {
+                // Quarter circle from the cleared side (left), tangent at p0.
+                let c = p0 + t0.perp() * rho;
+                (
+                    c - t0 * rho,
+                    Seg2 {
+                        to: p0,
+                        arc: Some((c, true)),
+                    },
+                )
+            } else {
+                (p0 - t0 * rho, Seg2 { to: p0, arc: None })
+            };
+            if arc_ok(s, &seg, g, cleared) {
+                start = s;
+                segs.push(seg);
+                lead_in = if circular { "circular" } else { "tangential" };
+                break;
+            }
+        }
+    }
+    segs.extend(chain_segs(chain));
+    if inside(pe, &g.region_polys) {
+        for s in [1.0, 0.5, 0.25] {
+            let rho = 0.25 * d * s;
+            let c = pe + te.perp() * rho;
+            let seg = Seg2 {
+                to: c + te * rho,
+                arc: Some((c, true)),
+            };
+            if arc_ok(pe, &seg, g, cleared) {
+                segs.push(seg);
+                break;
+            }
+        }
+    }
+    BoundaryPass {
+        start,
+        segs,
+        lead_in,
+    }
+}
+
+/// Parallel passes over `polys`: lines along `dir`, progressing along
+/// `progress` (±dir.perp()), at most `spacing` apart, reaching both extremes.
+/// Zigzag blocks (connected where a straight step-over stays inside), or one
+/// pass per block for one-way (travel `oneway_dir`).
+fn parallel_blocks(
+    polys: &[Vec<DVec2>],
+    dir: DVec2,
+    progress: DVec2,
+    spacing: f64,
+    extra_line: bool,
+    start_high: bool,
+    oneway: Option<DVec2>,
+) -> (Vec<Vec<DVec2>>, usize) {
+    let nrm = dir.perp();
+    let sign = progress.dot(nrm).signum();
+    let to_uv = |p: DVec2| DVec2::new(p.dot(dir), p.dot(nrm) * sign);
+    let from_uv = |q: DVec2| dir * q.x + nrm * (q.y * sign);
+    let uv: Vec<Vec<DVec2>> = polys
+        .iter()
+        .map(|p| p.iter().map(|q| to_uv(*q)).collect())
+        .collect();
+    let (mut vmin, mut vmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    for p in &uv {
+        for q in p {
+            vmin = vmin.min(q.y);
+            vmax = vmax.max(q.y);
+        }
+    }
+    if !vmin.is_finite() {
+        return (Vec::new(), 0);
+    }
+    let eps = 1e-4;
+    let (lo, hi) = (vmin + eps, vmax - eps);
+    let span = (hi - lo).max(0.0);
+    let mut n = if span < 1e-9 {
+        1
+    } else {
+        (span / spacing).ceil() as usize + 1
+    };
+    if extra_line {
+        n += 1;
+    }
+    let vs: Vec<f64> = (0..n)
+        .map(|i| {
+            if n == 1 {
+                (lo + hi) / 2.0
+            } else {
+                lo + span * i as f64 / (n - 1) as f64
+            }
+        })
+        .collect();
+    let intervals: Vec<Vec<(f64, f64)>> = vs
+        .iter()
+        .map(|&v| {
+            let mut xs = Vec::new();
+            for p in &uv {
+                let m = p.len();
+                for i in 0..m {
+                    let (a, b) = (p[i], p[(i + 1) % m]);
+                    if (a.y > v) != (b.y > v) {
+                        xs.push(a.x + (v - a.y) * (b.x - a.x) / (b.y - a.y));
+                    }
+                }
+            }
+            xs.sort_by(f64::total_cmp);
+            xs.chunks_exact(2)
+                .map(|c| (c[0], c[1]))
+                .filter(|c| c.1 - c.0 > 1e-6)
+                .collect()
+        })
+        .collect();
+    let mut used: Vec<Vec<bool>> = intervals.iter().map(|l| vec![false; l.len()]).collect();
+    let mut blocks: Vec<Vec<DVec2>> = Vec::new();
+    if let Some(t) = oneway {
+        let forward = t.dot(dir) >= 0.0;
+        for (li, ivs) in intervals.iter().enumerate() {
+            for iv in ivs {
+                let (a, b) = if forward { (iv.0, iv.1) } else { (iv.1, iv.0) };
+                blocks.push(vec![
+                    from_uv(DVec2::new(a, vs[li])),
+                    from_uv(DVec2::new(b, vs[li])),
+                ]);
+            }
+        }
+        return (blocks, n);
+    }
+    let mut last_end: Option<f64> = None;
+    loop {
+        let Some(li) = (0..intervals.len()).find(|&l| used[l].iter().any(|u| !u)) else {
+            break;
+        };
+        // The interval whose end is nearest to where the last block ended.
+        let ii = (0..intervals[li].len())
+            .filter(|&i| !used[li][i])
+            .min_by(|&a, &b| {
+                let key = |i: usize| {
+                    let iv = intervals[li][i];
+                    match last_end {
+                        Some(u) => (iv.0 - u).abs().min((iv.1 - u).abs()),
+                        None => iv.0,
+                    }
+                };
+                key(a).total_cmp(&key(b))
+            })
+            .unwrap_or(0);
+        used[li][ii] = true;
+        let iv = intervals[li][ii];
+        let high_first = match last_end {
+            Some(u) => (iv.1 - u).abs() < (iv.0 - u).abs(),
+            None => start_high,
+        };
+        let (a, b) = if high_first {
+            (iv.1, iv.0)
+        } else {
+            (iv.0, iv.1)
+        };
+        let mut block = vec![
+            from_uv(DVec2::new(a, vs[li])),
+            from_uv(DVec2::new(b, vs[li])),
+        ];
+        let mut cur_u = b;
+        let mut cur_iv = iv;
+        let mut l = li;
+        while l + 1 < intervals.len() {
+            let nl = l + 1;
+            let cand = (0..intervals[nl].len())
+                .filter(|&i| !used[nl][i])
+                .filter(|&i| {
+                    let c = intervals[nl][i];
+                    c.0 <= cur_iv.1 + 1e-6 && c.1 >= cur_iv.0 - 1e-6
+                })
+                .min_by(|&x, &y| {
+                    let dx = |i: usize| {
+                        let c = intervals[nl][i];
+                        (c.0 - cur_u).abs().min((c.1 - cur_u).abs())
+                    };
+                    dx(x).total_cmp(&dx(y))
+                });
+            let Some(ci) = cand else { break };
+            let c = intervals[nl][ci];
+            let (na, nb) = if (c.0 - cur_u).abs() <= (c.1 - cur_u).abs() {
+                (c.0, c.1)
+            } else {
+                (c.1, c.0)
+            };
+            let from = from_uv(DVec2::new(cur_u, vs[l]));
+            let to = from_uv(DVec2::new(na, vs[nl]));
+            if !segment_inside(from, to, polys, STEP / 2.0) {
+                break;
+            }
+            used[nl][ci] = true;
+            block.push(to);
+            block.push(from_uv(DVec2::new(nb, vs[nl])));
+            cur_u = nb;
+            cur_iv = c;
+            l = nl;
+        }
+        last_end = Some(cur_u);
+        blocks.push(block);
+    }
+    (blocks, n)
+}
+
+/// Cutting conditions: spindle speed and feeds (mm/min) for a tool.
+fn conditions(env: &Env, tool: &Tool) -> (f64, f64, f64) {
+    let c = &env.material.cutting;
+    let rpm = (1000.0 * c.cutting_speed / (std::f64::consts::PI * tool.diameter))
+        .min(env.machine.spindle_max_rpm);
+    let vmax = 60.0 * env.machine.x.v_max.min(env.machine.y.v_max);
+    let z = tool.flutes as f64;
+    (
+        rpm,
+        (c.feed_per_tooth_roughing * z * rpm).min(vmax),
+        (c.feed_per_tooth_finishing * z * rpm).min(vmax),
+    )
+}
+
+/// The z-levels of a range from the top: `n` levels `dz` apart.
+fn levels(top: f64, bottom: f64, depth: f64) -> Vec<f64> {
+    let h = top - bottom;
+    if h <= 1e-9 {
+        return Vec::new();
+    }
+    let n = (h / depth - 1e-9).ceil().max(1.0) as usize;
+    (1..=n)
+        .map(|i| {
+            if i == n {
+                bottom
+            } else {
+                top - h * i as f64 / n as f64
+            }
+        })
+        .collect()
+}
+
+pub(crate) fn feature_operations(f: &MachiningFeature, env: &Env) -> Result<Made, String> {
+    let mk = &env.k.methods;
+    let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
+    if edges[0].0.len() < 2 {
+        return Err("its profile has fewer than two vertices".into());
+    }
+    if !(f.shape.z_max > f.shape.z_min) {
+        return Err(format!(
+            "empty depth range [{}, {}]",
+            f.shape.z_min, f.shape.z_max
+        ));
+    }
+    let sides = sides_class(&edges);
+    let bottom_product = f.bottom_adjacency == Adjacency::Product;
+    let m = mk
+        .for_feature(bottom_product, sides)
+        .ok_or_else(|| format!("no method applies (sides {sides:?})"))?;
+    let mut warnings = Vec::new();
+
+    // Tool: by the method's rule, smaller than the smallest product corner.
+    let mut cands: Vec<&Tool> = env.tools.tools.iter().collect();
+    cands.sort_by(|a, b| {
+        a.diameter
+            .total_cmp(&b.diameter)
+            .then_with(|| a.id.cmp(&b.id))
+    });
+    if m.tool.choice == ToolChoice::LargestThatFits {
+        cands.reverse();
+    }
+    let corner = smallest_product_corner(&edges);
+    if let (Some(ratio), Some(rho)) = (m.tool.corner_ratio, corner) {
+        let small: Vec<&Tool> = cands
+            .iter()
+            .copied()
+            .filter(|t| t.diameter / 2.0 <= ratio * rho)
+            .collect();
+        if small.is_empty() {
+            warnings.push(format!(
+                "{}: no tool is smaller than its smallest product corner (radius {rho:.3} mm); \
+                 material stays in those corners",
+                f.id
+            ));
+        } else {
+            cands = small;
+        }
+    }
+    let (tool, g) = cands
+        .iter()
+        .find_map(|t| geometry(f, m, t).map(|g| (*t, g)))
+        .ok_or("no tool of the set-up's tool set fits")?;
+    let d = tool.diameter;
+    let (rpm, feed_rough, feed_finish) = conditions(env, tool);
+    let boundary = m.boundary.as_ref().filter(|_| !g.product.is_empty());
+    let feed_boundary = match boundary {
+        Some(b) if b.finishing => feed_finish,
+        _ => feed_rough,
+    };
+    let s_b = boundary.map_or(0.0, |b| b.stepover * d);
+    let rest_area = if s_b > 0.0 {
+        g.centre.offset(s_b)
+    } else {
+        g.centre.clone()
+    };
+    let rest_polys = rest_area.polygons(STEP);
+    let chains = match boundary {
+        Some(_) => boundary_chains(&g, 0.5 * s_b.max(1e-3), mk.spindle),
+        None => Vec::new(),
+    };
+    let cleared_for_runup = if rest_polys.is_empty() {
+        &g.centre_polys
+    } else {
+        &rest_polys
+    };
+    let passes: Vec<BoundaryPass> = match boundary {
+        Some(b) => chains
+            .iter()
+            .map(|(c, _)| boundary_pass(c, &g, b.run_up, d, cleared_for_runup))
+            .collect(),
+        None => Vec::new(),
+    };
+    for p in &passes {
+        if p.lead_in == "none" {
+            warnings.push(format!(
+                "{}: a boundary pass starting at ({:.2}, {:.2}) has no room for a run-up",
+                f.id, p.start.x, p.start.y
+            ));
+        }
+    }
+
+    // Pass direction: along the longest product edge, else the longest edge.
+    let longest = |pred: &dyn Fn(Adjacency) -> bool| {
+        edges
+            .iter()
+            .flat_map(|(es, adj)| es.iter().zip(adj.iter()))
+            .filter(|(_, a)| pred(**a))
+            .max_by(|a, b| a.0.length().total_cmp(&b.0.length()))
+            .map(|(e, _)| *e)
+    };
+    let ref_edge = longest(&|a| a == Adjacency::Product)
+        .or_else(|| longest(&|_| true))
+        .ok_or("no edges")?;
+    let dir = {
+        let t = (ref_edge.b - ref_edge.a).normalize_or_zero();
+        if t == DVec2::ZERO {
+            DVec2::X
+        } else {
+            t
+        }
+    };
+    // Passes progress towards the product (the boundary region is last).
+    let progress = if g.product.is_empty() {
+        dir.perp()
+    } else {
+        let pm: DVec2 =
+            g.product.iter().map(|e| e.midpoint()).sum::<DVec2>() / g.product.len() as f64;
+        let cm = centroid(&g.centre_polys);
+        if (pm - cm).dot(dir.perp()) >= 0.0 {
+            dir.perp()
+        } else {
+            -dir.perp()
+        }
+    };
+
+    let angle = m.entry.angle_deg().to_radians();
+    let flute = tool.flute_length;
+    let z_top = f.shape.z_max;
+    let z_min = f.shape.z_min;
+    let bottom_layer = m.bottom_layer.as_ref().filter(|_| bottom_product);
+    let z_main_bottom = match bottom_layer {
+        Some(b) => (z_min + b.thickness).min(z_top),
+        None => z_min,
+    };
+    let mut a_rest = (m.rest.depth * d).min(flute);
+    let full_cut_always = matches!(m.full_cut, FullCut::Always { .. });
+    if let FullCut::Always { depth_factor } = m.full_cut {
+        a_rest *= depth_factor;
+    }
+    let a_b = boundary.map_or(f64::INFINITY, |b| (b.depth * d).min(flute));
+    let zs = levels(z_top, z_main_bottom, a_rest);
+    let safe_z = env.global_top.max(z_top) + mk.safe_clearance;
+    // Local heights: the global top is along `up`; the feature's frame
+    // origin sits on that axis at origin·up.
+    let up_off = f
+        .shape
+        .frame
+        .origin
+        .dot(f.shape.frame.z.normalize_or_zero());
+    let safe_z = (safe_z - up_off).max(z_top + mk.safe_clearance);
+    let space = Space {
+        centre_region: &g.centre_polys,
+        z_top,
+        safe_z,
+        step: STEP,
+    };
+
+    // The rest pattern of one z-level, chosen once for all levels.
+    let spacing = m.rest.stepover * d;
+    let oneway_dir = -progress.perp() * spin_sign(mk.spindle);
+    let mut rest_plan = RestPlan::default();
+    let mut prov_values: Vec<(&str, f64)> = Vec::new();
+    let mut notes = vec![
+        format!("pattern={:?}", m.pattern),
+        format!("sides={sides:?}"),
+    ];
+    let mut mirror = false;
+    if m.pattern.is_spiral() {
+        rest_plan = spiral_rest(f, m, &g, d, spacing, s_b, &mut notes)?;
+    } else if !rest_polys.is_empty() {
+        let oneway = (m.pattern == Pattern::OneWay).then_some(oneway_dir);
+        // Parity (§4.3.3, figure 4.22): choose the line count and the first
+        // pass's end so one z-level flows into the boundary pass and the
+        // next z-level starts where this one ended.
+        let mut best: Option<(f64, usize, RestPlan)> = None;
+        for extra in [false, true] {
+            for high in [false, true] {
+                let (blocks, n) =
+                    parallel_blocks(&rest_polys, dir, progress, spacing, extra, high, oneway);
+                if blocks.is_empty() {
+                    continue;
+                }
+                let first = blocks[0][0];
+                let last = *blocks.last().and_then(|b| b.last()).unwrap_or(&first);
+                let cost = match (passes.first(), passes.last()) {
+                    (Some(p), Some(q)) => last.distance(p.start) + end_of(q).distance(first),
+                    _ => 0.0,
+                } + if extra { spacing * 0.5 } else { 0.0 };
+                let better = best.as_ref().is_none_or(|b| cost < b.0 - 1e-9);
+                if better {
+                    best = Some((cost, n, RestPlan { blocks, lines: n }));
+                }
+                if passes.is_empty() {
+                    break;
+                }
+            }
+            if passes.is_empty() {
+                break;
+            }
+        }
+        if let Some((_, _, p)) = best {
+            rest_plan = p;
+        }
+        let side_passes = rest_plan.lines + usize::from(!passes.is_empty());
+        prov_values.push(("side_passes", side_passes as f64));
+        // Mirrored alternating z-levels where a level ends away from its start.
+        let first = rest_plan.blocks.first().map(|b| b[0]);
+        let last = rest_plan.blocks.last().and_then(|b| b.last().copied());
+        let ends_away = match (first, last) {
+            (Some(a), Some(b)) => a.distance(b) > d,
+            _ => false,
+        };
+        mirror = match m.mirror_layers {
+            MirrorLayers::Never => false,
+            MirrorLayers::Always => true,
+            MirrorLayers::WhenOddPasses => ends_away,
+        } && passes.is_empty()
+            && oneway.is_none();
+        if !passes.is_empty() && m.mirror_layers != MirrorLayers::Never && ends_away {
+            notes.push(
+                "mirror=refused-product-sides(down milling fixes the boundary direction)".into(),
+            );
+        }
+        // §6.3.3 full-cut criterion: alternating layers with a full cut in
+        // every second one vs. the parity-matched pattern used here.
+        if let FullCut::WhenFewerSidePasses { depth_factor } = m.full_cut {
+            if !passes.is_empty() {
+                let l = zs.len();
+                let pair = a_rest * (1.0 + depth_factor);
+                let l_fc = 2 * ((z_top - z_main_bottom) / pair - 1e-9).ceil().max(1.0) as usize;
+                let base = rest_plan.lines.saturating_sub(1).max(1) + 1;
+                let alt = l_fc * base + l_fc / 2;
+                let used = l * side_passes;
+                prov_values.push(("full_cut_alternating_passes", alt as f64));
+                prov_values.push(("parity_matched_passes", used as f64));
+                if alt < used {
+                    warnings.push(format!(
+                        "{}: alternating layers with a full cut would take fewer side passes \
+                         ({alt} < {used}); not built, the parity-matched pattern is used",
+                        f.id
+                    ));
+                }
+            }
+        }
+    }
+    if mirror {
+        notes.push("mirror=alternate".into());
+    }
+
+    let entry_kind = if full_cut_always {
+        Kind::FullCut
+    } else {
+        Kind::Rest
+    };
+    let rho_c = m.corner_rounding * d;
+    let mut ops = Vec::new();
+    let mut main = Builder::new(DVec3::ZERO);
+    let mut started = false;
+    let mut z_prev = z_top;
+    let mut layer_count = 0;
+    for (li, &z) in zs.iter().enumerate() {
+        let reversed = mirror && li % 2 == 1;
+        let blocks: Vec<Vec<DVec2>> = if reversed {
+            rest_plan
+                .blocks
+                .iter()
+                .rev()
+                .map(|b| b.iter().rev().copied().collect())
+                .collect()
+        } else {
+            rest_plan.blocks.clone()
+        };
+        for (bi, block) in blocks.iter().enumerate() {
+            if block.len() < 2 {
+                continue;
+            }
+            go_to(&mut main, &mut started, &space, block[0], z_prev);
+            let kind = if full_cut_always && bi == 0 {
+                Kind::FullCut
+            } else {
+                Kind::Rest
+            };
+            enter(
+                &mut main,
+                m.entry,
+                block,
+                z_prev,
+                z,
+                angle,
+                d,
+                &g,
+                bi == 0 && m.pattern.is_spiral(),
+                mk.spindle,
+                entry_kind,
+            )
+            .ok_or_else(|| format!("no room to ramp into z-level {z:.3}"))?;
+            let segs = rounded(block, rho_c);
+            if full_cut_always && bi == 0 && m.pattern.is_spiral() {
+                // The first orbit of a spiral cuts the full width.
+                let p0 = block[0];
+                for s in &segs {
+                    let k = if s.to.distance(p0) <= spacing {
+                        Kind::FullCut
+                    } else {
+                        Kind::Rest
+                    };
+                    main.follow(std::slice::from_ref(s), z, k);
+                }
+            } else {
+                main.follow(&segs, z, kind);
+            }
+        }
+        boundary_level(
+            &mut main,
+            &mut started,
+            &space,
+            &passes,
+            &rest_polys,
+            z_prev,
+            z,
+            a_b,
+        );
+        z_prev = z;
+        layer_count += 1;
+    }
+    let base_values = |prov: &mut Provenance, stepover: f64, depth: f64, layers: usize| {
+        prov.values.insert("tool_diameter_mm".into(), d);
+        prov.values.insert("spindle_rpm".into(), rpm);
+        prov.values.insert("feed_rough_mm_min".into(), feed_rough);
+        prov.values.insert("feed_finish_mm_min".into(), feed_finish);
+        prov.values
+            .insert("feed_boundary_mm_min".into(), feed_boundary);
+        prov.values.insert("stepover_rest_mm".into(), stepover);
+        prov.values.insert("stepover_boundary_mm".into(), s_b);
+        prov.values.insert("depth_of_cut_mm".into(), depth);
+        prov.values.insert("layers".into(), layers as f64);
+        if let Some(c) = corner {
+            prov.values.insert("smallest_product_corner_mm".into(), c);
+        }
+    };
+    let rule = format!("methods.{}", m.id);
+    let lop = |moves: Builder, prov: Provenance| LocalOp {
+        method: m.id.clone(),
+        tool: tool.id.clone(),
+        rpm,
+        feed_rough,
+        feed_finish,
+        feed_boundary,
+        feed_link: feed_rough * mk.link_feed_factor,
+        start: moves.start,
+        moves: moves.moves,
+        provenance: prov,
+    };
+    if !main.moves.is_empty() {
+        retract(&mut main, safe_z);
+        let mut prov = Provenance::new(ProvenanceSource::Knowledge, rule.clone());
+        base_values(
+            &mut prov,
+            spacing,
+            (z_top - z_main_bottom) / layer_count.max(1) as f64,
+            layer_count,
+        );
+        for (k, v) in &prov_values {
+            prov.values.insert((*k).into(), *v);
+        }
+        prov.note = notes.join("; ");
+        check(&main, &g, z_min, z_top, f)?;
+        ops.push(lop(main, prov));
+    }
+
+    // The product-adjacent bottom layer: its own operation, finishing
+    // conditions on all of it (§4.3.4, §6.3.1).
+    if let Some(bl) = bottom_layer {
+        let so = bl.stepover * d;
+        let mut b = Builder::new(DVec3::ZERO);
+        let mut started = false;
+        let top = z_main_bottom;
+        let mut bnotes = vec![
+            format!("pattern={:?}", bl.pattern),
+            "layer=bottom".to_string(),
+        ];
+        let blocks: Vec<Vec<DVec2>> = if bl.pattern.is_spiral() {
+            let mut mm = m.clone();
+            mm.pattern = bl.pattern;
+            spiral_rest(f, &mm, &g, d, so, s_b, &mut bnotes)?.blocks
+        } else {
+            let oneway = (bl.pattern == Pattern::OneWay).then_some(oneway_dir);
+            parallel_blocks(&rest_polys, dir, progress, so, false, false, oneway).0
+        };
+        for block in &blocks {
+            if block.len() < 2 {
+                continue;
+            }
+            go_to(&mut b, &mut started, &space, block[0], top);
+            enter(
+                &mut b,
+                m.entry,
+                block,
+                top,
+                z_min,
+                angle,
+                d,
+                &g,
+                bl.pattern.is_spiral(),
+                mk.spindle,
+                Kind::BottomFinish,
+            )
+            .ok_or("no room to ramp into the bottom layer")?;
+            b.follow(&rounded(block, rho_c), z_min, Kind::BottomFinish);
+        }
+        boundary_level(
+            &mut b,
+            &mut started,
+            &space,
+            &passes,
+            &rest_polys,
+            top,
+            z_min,
+            a_b,
+        );
+        if !b.moves.is_empty() {
+            retract(&mut b, safe_z);
+            let mut prov =
+                Provenance::new(ProvenanceSource::Knowledge, format!("{rule}.bottom_layer"));
+            base_values(&mut prov, so, top - z_min, 1);
+            prov.note = bnotes.join("; ");
+            check(&b, &g, z_min, z_top, f)?;
+            ops.push(lop(b, prov));
+        }
+    }
+    if ops.is_empty() {
+        return Err("the tool-centre region is empty at every z-level".into());
+    }
+    Ok(Made { ops, warnings })
+}
+
+fn spin_sign(s: SpindleDirection) -> f64 {
+    match s {
+        SpindleDirection::Clockwise => 1.0,
+        SpindleDirection::CounterClockwise => -1.0,
+    }
+}
+
+fn end_of(p: &BoundaryPass) -> DVec2 {
+    p.segs.last().map_or(p.start, |s| s.to)
+}
+
+fn centroid(polys: &[Vec<DVec2>]) -> DVec2 {
+    let mut s = DVec2::ZERO;
+    let mut n = 0.0;
+    for p in polys {
+        for q in p {
+            s += *q;
+            n += 1.0;
+        }
+    }
+    if n > 0.0 {
+        s / n
+    } else {
+        s
+    }
+}
+
+#[derive(Default)]
+struct RestPlan {
+    blocks: Vec<Vec<DVec2>>,
+    lines: usize,
+}
+
+/// The rest region of a closed pocket: the pocketing crate's curvilinear
+/// spiral (or offset rings), without its finishing ring (the boundary pass
+/// replaces it with true arcs).
+fn spiral_rest(
+    f: &MachiningFeature,
+    m: &Method,
+    g: &Geometry,
+    d: f64,
+    stepover: f64,
+    s_b: f64,
+    notes: &mut Vec<String>,
+) -> Result<RestPlan, String> {
+    use thinplan_pocketing::{curvilinear_path, offset_path, Pocket, PocketParams};
+    let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
+    let outer = oriented(pline_from_edges(&edges[0].0, true), true);
+    let islands = edges[1..]
+        .iter()
+        .map(|(es, _)| oriented(pline_from_edges(es, true), false))
+        .collect();
+    let pocket = Pocket::with_islands(format!("{}", f.id), outer, islands);
+    let mut params = PocketParams::for_tool(d);
+    params.stepover = stepover.min(d);
+    params.finish_stepover = s_b.min(params.stepover);
+    let res = if m.pattern == Pattern::CurvilinearSpiral {
+        curvilinear_path(&pocket, &params).or_else(|_| offset_path(&pocket, &params))
+    } else {
+        offset_path(&pocket, &params)
+    }
+    .map_err(|e| format!("pocket path: {e}"))?;
+    notes.push(format!("spiral={}", res.method.as_str()));
+    if let Some(r) = &res.fallback_reason {
+        notes.push(format!("fallback={r}"));
+    }
+    let mut pts: Vec<DVec2> = res.points[..res.finish_start.min(res.points.len())].to_vec();
+    // Keep only points the tool centre may reach (the pocket crate offsets
+    // the same region; this guards against its sampling chords).
+    pts.retain(|p| product_distance(*p, &g.product) >= g.r + 0.5 * s_b);
+    if pts.len() < 2 {
+        return Ok(RestPlan::default());
+    }
+    Ok(RestPlan {
+        blocks: vec![pts],
+        lines: 1,
+    })
+}
+
+fn go_to(b: &mut Builder, started: &mut bool, space: &Space, to: DVec2, z_clear: f64) {
+    if !*started {
+        *b = Builder::new(to.extend(space.safe_z));
+        b.line(to.extend(space.z_top), Kind::Rapid);
+        b.line(to.extend(z_clear), Kind::Link);
+        *started = true;
+    } else {
+        space.transit(b, to, z_clear);
+    }
+}
+
+fn retract(b: &mut Builder, safe_z: f64) {
+    let p = b.pos;
+    b.line(p.truncate().extend(safe_z), Kind::Rapid);
+}
+
+/// Gets from `z_from` down to `z` at the block's start: a helix where the
+/// method asks and it fits, else a ramp along the block; `None` if neither.
+#[allow(clippy::too_many_arguments)]
+fn enter(
+    b: &mut Builder,
+    entry: LevelEntry,
+    block: &[DVec2],
+    z_from: f64,
+    z: f64,
+    angle: f64,
+    d: f64,
+    g: &Geometry,
+    spiral_start: bool,
+    spindle: SpindleDirection,
+    kind: Kind,
+) -> Option<()> {
+    if z_from - z <= 1e-12 {
+        return Some(());
+    }
+    if let LevelEntry::Helix { radius, .. } = entry {
+        let p0 = block[0];
+        for s in [1.0, 0.5, 0.25] {
+            let rho = radius * d * s;
+            let c = p0 - DVec2::new(rho, 0.0);
+            let fits = inside(c, &g.centre_polys)
+                && boundary_distance(c, &g.centre_polys) >= rho + 1e-6
+                && product_distance(c, &g.product) >= g.r + rho;
+            if fits {
+                // Down milling around the helix: counter-clockwise for M3.
+                let ccw = spindle == SpindleDirection::Clockwise;
+                helix(b, c, rho, z_from, z, angle, ccw, kind);
+                return Some(());
+            }
+        }
+        let _ = spiral_start;
+    }
+    ramp(b, block, z_from, z, angle, 0.02 * d, kind)
+}
+
+/// The boundary passes of one z-level, stacked where the z-level is deeper
+/// than the boundary depth of cut.
+#[allow(clippy::too_many_arguments)]
+fn boundary_level(
+    b: &mut Builder,
+    started: &mut bool,
+    space: &Space,
+    passes: &[BoundaryPass],
+    rest_polys: &[Vec<DVec2>],
+    z_prev: f64,
+    z: f64,
+    a_b: f64,
+) {
+    if passes.is_empty() {
+        return;
+    }
+    let m = ((z_prev - z) / a_b - 1e-9).ceil().max(1.0) as usize;
+    for j in 1..=m {
+        let zj = if j == m {
+            z
+        } else {
+            z_prev - (z_prev - z) * j as f64 / m as f64
+        };
+        for p in passes {
+            let here = b.pos.truncate();
+            if *started
+                && !rest_polys.is_empty()
+                && inside(here, rest_polys)
+                && segment_inside(here, p.start, rest_polys, STEP)
+            {
+                // Through the rest region just cleared at this level.
+                b.line(p.start.extend(b.pos.z), Kind::Link);
+                b.line(p.start.extend(zj), Kind::Link);
+            } else {
+                go_to(b, started, space, p.start, zj);
+            }
+            b.follow(&p.segs, zj, Kind::Boundary);
+        }
+    }
+}
+
+/// The safety net: every feed move's tool centre at least r from every
+/// product edge and never below the feature's floor; rapids above its top.
+fn check(
+    b: &Builder,
+    g: &Geometry,
+    z_min: f64,
+    z_top: f64,
+    f: &MachiningFeature,
+) -> Result<(), String> {
+    let mut from = b.start;
+    for mv in &b.moves {
+        if mv.kind == Kind::Rapid {
+            // Rapids: straight up out of cleared space, or above the top.
+            let vertical_up =
+                from.truncate().distance(mv.to.truncate()) < 1e-9 && mv.to.z >= from.z;
+            if !vertical_up && from.z.min(mv.to.z) < z_top - 1e-9 {
+                let p = mv.to;
+                return Err(format!(
+                    "internal: a rapid move of {} runs below the feature top at ({:.3}, {:.3}, {:.3})",
+                    f.id, p.x, p.y, p.z
+                ));
+            }
+            from = mv.to;
+            continue;
+        }
+        for p in crate::path::move_points(from, mv, STEP)
+            .into_iter()
+            .chain([from])
+        {
+            if mv.kind == Kind::Rapid {
+                if p.z < z_top - 1e-9 {
+                    return Err(format!(
+                        "internal: a rapid move of {} runs below the feature top at ({:.3}, {:.3}, {:.3})",
+                        f.id, p.x, p.y, p.z
+                    ));
+                }
+                continue;
+            }
+            if p.z < z_min - 1e-9 {
+                return Err(format!("a move goes below the floor at z {:.4}", p.z));
+            }
+            let dist = product_distance(p.truncate(), &g.product);
+            if dist < g.r - EPS {
+                return Err(format!(
+                    "a move would touch product: tool centre ({:.3}, {:.3}) is {:.4} mm from a \
+                     product edge, tool radius {:.3}",
+                    p.x, p.y, dist, g.r
+                ));
+            }
+        }
+        from = mv.to;
+    }
+    Ok(())
+}

@@ -1,0 +1,247 @@
+//! Stages 7 and 8: operations with modular tool paths, and their order.
+//!
+//! Per machining feature (after stage Resolve), the method of
+//! `knowledge/methods.ron` that matches its adjacency picks the pattern, the
+//! tool, stepovers, depths and entries (§6.3.3). Per z-level from the top
+//! the modular pattern (§4.3.4, table 6.1) is built in the feature's frame:
+//! rest-region passes (zigzag, one-way or a pocket spiral) over the
+//! tool-centre region shrunk by the boundary stepover, then boundary passes
+//! at exactly the tool radius from every product edge, down milling, with a
+//! run-up; mirrored alternating z-levels where the method asks; ramp or helix
+//! entries, never plunges; a separate product-adjacent bottom layer with
+//! finishing conditions. Cutting conditions come from the material and tool;
+//! times from `thinplan-feeds` under the machine's limits. [`order`] is
+//! stage 8.
+
+pub mod geom;
+mod layers;
+pub mod order;
+pub mod path;
+
+use std::collections::BTreeMap;
+
+use glam::{DVec2, DVec3};
+use thinplan_feeds::MachineLimits;
+use thinplan_knowledge::Knowledge;
+use thinplan_plan::{
+    ArcMove, MachiningFeatureId, Operation, OperationId, PathMove, Plan, Provenance,
+    ProvenanceSource, Refusal, Region3, Stage,
+};
+
+pub use order::{order, OrderError};
+pub use path::{Kind, LMove};
+
+/// Why stage 7 could not run at all (a single feature that cannot be milled
+/// is a refusal, not an error).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OperationsError {
+    #[error("stage {0:?} has not run: operations need resolved machining features")]
+    MissingStage(Stage),
+    #[error("the set-up names {what} `{id}`, which the knowledge does not have")]
+    UnknownResource { what: &'static str, id: String },
+}
+
+/// The result of stage 7.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Operations {
+    pub operations: Vec<Operation>,
+    /// Things a planner should look at (material left in sharp corners, a
+    /// run-up that did not fit …), each naming the feature.
+    pub warnings: Vec<String>,
+    /// Features no operation was made for, with the reason.
+    pub refusals: Vec<Refusal>,
+}
+
+impl Operations {
+    /// Writes the operations into the plan: drops stale results from stage
+    /// Operations on, then records this stage.
+    pub fn apply_to(self, plan: &mut Plan) {
+        plan.invalidate_from(Stage::Operations);
+        plan.operations = self.operations;
+        plan.refusals.extend(self.refusals);
+        plan.stages_done.push(Stage::Operations);
+    }
+}
+
+/// What `plan --json` shows per operation, read back from its provenance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OperationSummary {
+    pub id: OperationId,
+    pub feature: MachiningFeatureId,
+    pub tool: String,
+    pub pattern: String,
+    pub layers: usize,
+    pub length_mm: f64,
+    pub time_s: f64,
+}
+
+/// The summary of an operation made by this stage.
+pub fn summary(op: &Operation) -> OperationSummary {
+    let v = |k: &str| op.provenance.values.get(k).copied().unwrap_or(0.0);
+    let pattern = op
+        .provenance
+        .note
+        .split(';')
+        .find_map(|s| s.trim().strip_prefix("pattern="))
+        .unwrap_or("")
+        .to_string();
+    OperationSummary {
+        id: op.id,
+        feature: op.feature,
+        tool: op.tool.clone(),
+        pattern,
+        layers: v("layers") as usize,
+        length_mm: v("length_mm"),
+        time_s: v("time_s"),
+    }
+}
+
+/// Stage 7: operations for every machining feature of the plan.
+pub fn operations(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError> {
+    if !plan.stages_done.contains(&Stage::Resolve) {
+        return Err(OperationsError::MissingStage(Stage::Resolve));
+    }
+    operations_unchecked(plan, k)
+}
+
+/// Stage 7 without the stage check (synthetic plans in tests and tools).
+pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError> {
+    let unknown = |what: &'static str, id: &str| OperationsError::UnknownResource {
+        what,
+        id: id.to_string(),
+    };
+    let machine = k
+        .machine(&plan.setup.machine)
+        .ok_or_else(|| unknown("machine", &plan.setup.machine))?;
+    let tools = k
+        .tool_set(&plan.setup.tool_set)
+        .ok_or_else(|| unknown("tool set", &plan.setup.tool_set))?;
+    let material = k
+        .material(&plan.setup.material)
+        .ok_or_else(|| unknown("material", &plan.setup.material))?;
+    let limits = MachineLimits {
+        v_max: [machine.x.v_max, machine.y.v_max, machine.z.v_max],
+        a_max: [machine.x.a_max, machine.y.a_max, machine.z.a_max],
+        a_centripetal: machine.a_centripetal,
+        corner_angle_deg: k.methods.corner_angle_deg,
+    };
+    // Links that leave a feature's footprint clear every feature's top.
+    let up = plan.setup.up.normalize_or_zero();
+    let global_top = plan
+        .machining_features
+        .iter()
+        .map(|f| f.shape.frame.origin.dot(up) + f.shape.z_max)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let env = layers::Env {
+        k,
+        tools,
+        material,
+        machine,
+        limits,
+        global_top,
+    };
+    let mut out = Operations {
+        operations: Vec::new(),
+        warnings: Vec::new(),
+        refusals: Vec::new(),
+    };
+    for f in &plan.machining_features {
+        match layers::feature_operations(f, &env) {
+            Ok(made) => {
+                out.warnings.extend(made.warnings);
+                for lo in made.ops {
+                    let id = OperationId(out.operations.len() as u32);
+                    out.operations.push(to_operation(id, f, lo, &env));
+                }
+            }
+            Err(reason) => {
+                out.warnings.push(format!("{}: {reason}", f.id));
+                out.refusals.push(Refusal {
+                    stage: Stage::Operations,
+                    rule: "operations.feature".into(),
+                    reason: format!("no operation for {}: {reason}", f.id),
+                    provenance: Provenance::new(ProvenanceSource::Default, "operations.feature"),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// A local operation mapped to part coordinates with its feeds and time.
+fn to_operation(
+    id: OperationId,
+    f: &thinplan_plan::MachiningFeature,
+    lo: layers::LocalOp,
+    env: &layers::Env,
+) -> Operation {
+    let fr = &f.shape.frame;
+    let z = fr.z.normalize_or_zero();
+    let x = (fr.x - z * fr.x.dot(z)).normalize_or_zero();
+    let y = z.cross(x);
+    let to_part = |p: DVec3| fr.origin + x * p.x + y * p.y + z * p.z;
+    let to_part2 = |c: DVec2, zz: f64| fr.origin + x * c.x + y * c.y + z * zz;
+    let feed = |kind: Kind| match kind {
+        Kind::Rest | Kind::FullCut => lo.feed_rough,
+        Kind::Boundary => lo.feed_boundary,
+        Kind::BottomFinish => lo.feed_finish,
+        Kind::Link => lo.feed_link,
+        Kind::Rapid => 0.0,
+    };
+    let region = |kind: Kind| match kind {
+        Kind::Rest | Kind::BottomFinish => Region3::Rest,
+        Kind::FullCut => Region3::FullCut,
+        Kind::Boundary => Region3::Boundary,
+        Kind::Link => Region3::Link,
+        Kind::Rapid => Region3::Rapid,
+    };
+    let mut moves = Vec::with_capacity(lo.moves.len());
+    let mut from = lo.start;
+    let mut length = 0.0;
+    let mut pts = vec![lo.start];
+    let mut caps = Vec::new();
+    let rapid_cap = env.limits.v_max.iter().copied().fold(0.0, f64::max);
+    for m in &lo.moves {
+        length += path::move_length(from, m);
+        let cap = if m.kind == Kind::Rapid {
+            rapid_cap
+        } else {
+            feed(m.kind) / 60.0
+        };
+        for p in path::move_points(from, m, 1.0) {
+            pts.push(p);
+            caps.push(cap);
+        }
+        moves.push(PathMove {
+            to: to_part(m.to),
+            arc: m.arc.map(|(c, ccw)| ArcMove {
+                centre: to_part2(c, m.to.z),
+                axis: z,
+                clockwise: !ccw,
+            }),
+            feed: feed(m.kind),
+            region: region(m.kind),
+        });
+        from = m.to;
+    }
+    let time = thinplan_feeds::schedule_polyline(&pts, &caps, &env.limits).total_time;
+    let mut prov = lo.provenance;
+    prov.values.insert("length_mm".into(), length);
+    prov.values.insert("time_s".into(), time);
+    Operation {
+        id,
+        feature: f.id,
+        method: lo.method,
+        tool: lo.tool,
+        tool_axis: z,
+        spindle_rpm: lo.rpm,
+        start: to_part(lo.start),
+        moves,
+        provenance: prov,
+    }
+}
+
+/// Per-operation numbers by id (for reports and benchmarks).
+pub fn summaries(plan: &Plan) -> BTreeMap<OperationId, OperationSummary> {
+    plan.operations.iter().map(|o| (o.id, summary(o))).collect()
+}

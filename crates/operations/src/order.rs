@@ -1,0 +1,156 @@
+//! Stage 8: the operation order (§5.4.3).
+//!
+//! Every machining constraint is honoured: all operations of `first` before
+//! all of `second` (`Before`); the operations of a simultaneous group run as
+//! one block. Within a feature the operations keep the order stage 7 made
+//! them in (main layers before the bottom layer). Among the groups ready to
+//! run, the one that needs no tool change wins, then the one whose start is
+//! nearest to where the tool is, then the lowest id — deterministic.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::DVec3;
+use thinplan_plan::{ConstraintKind, MachiningFeatureId, OperationId, Plan, Stage};
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OrderError {
+    #[error("stage {0:?} has not run: order needs operations")]
+    MissingStage(Stage),
+    #[error("the machining constraints form a cycle through {0:?}")]
+    Cycle(Vec<MachiningFeatureId>),
+}
+
+/// Stage 8: a topological order of the plan's operations.
+pub fn order(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
+    if !plan.stages_done.contains(&Stage::Operations) {
+        return Err(OrderError::MissingStage(Stage::Operations));
+    }
+    order_unchecked(plan)
+}
+
+/// Fills `plan.operation_order` and records stage 8.
+pub fn apply_order(plan: &mut Plan, order: Vec<OperationId>) {
+    plan.invalidate_from(Stage::Order);
+    plan.operation_order = order;
+    plan.stages_done.push(Stage::Order);
+}
+
+fn find(
+    p: &mut BTreeMap<MachiningFeatureId, MachiningFeatureId>,
+    x: MachiningFeatureId,
+) -> MachiningFeatureId {
+    let mut r = x;
+    while let Some(&q) = p.get(&r) {
+        if q == r {
+            break;
+        }
+        r = q;
+    }
+    p.insert(x, r);
+    r
+}
+
+/// Stage 8 without the stage check.
+pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
+    // Features that have operations, and their operations in stage-7 order.
+    let mut ops_of: BTreeMap<MachiningFeatureId, Vec<usize>> = BTreeMap::new();
+    for (i, o) in plan.operations.iter().enumerate() {
+        ops_of.entry(o.feature).or_default().push(i);
+    }
+    let mut feats: BTreeSet<MachiningFeatureId> = ops_of.keys().copied().collect();
+    for c in &plan.machining_constraints {
+        feats.insert(c.first);
+        feats.insert(c.second);
+    }
+    // Simultaneous groups by union-find (the smallest id represents).
+    let mut parent: BTreeMap<MachiningFeatureId, MachiningFeatureId> =
+        feats.iter().map(|f| (*f, *f)).collect();
+    for c in &plan.machining_constraints {
+        if c.kind == ConstraintKind::Simultaneous {
+            let (a, b) = (find(&mut parent, c.first), find(&mut parent, c.second));
+            if a != b {
+                let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+                parent.insert(hi, lo);
+            }
+        }
+    }
+    let mut group_of = BTreeMap::new();
+    for f in &feats {
+        group_of.insert(*f, find(&mut parent, *f));
+    }
+    let groups: BTreeSet<MachiningFeatureId> = group_of.values().copied().collect();
+    let mut preds: BTreeMap<MachiningFeatureId, BTreeSet<MachiningFeatureId>> =
+        groups.iter().map(|g| (*g, BTreeSet::new())).collect();
+    for c in &plan.machining_constraints {
+        if c.kind == ConstraintKind::Before {
+            let (a, b) = (group_of[&c.first], group_of[&c.second]);
+            if a == b {
+                return Err(OrderError::Cycle(vec![c.first, c.second]));
+            }
+            preds.get_mut(&b).expect("every group").insert(a);
+        }
+    }
+    // A group's operations: its features' operations, interleaved by
+    // feature order (simultaneous features are machined together).
+    let members = |g: MachiningFeatureId| -> Vec<usize> {
+        let mut v = Vec::new();
+        for (f, ops) in &ops_of {
+            if group_of[f] == g {
+                v.extend(ops.iter().copied());
+            }
+        }
+        // Fewest tool changes inside the block: by tool, stable.
+        v.sort_by(|a, b| plan.operations[*a].tool.cmp(&plan.operations[*b].tool));
+        v
+    };
+    let mut done: BTreeSet<MachiningFeatureId> = BTreeSet::new();
+    let mut out = Vec::with_capacity(plan.operations.len());
+    let mut tool: Option<String> = None;
+    let mut pos: Option<DVec3> = None;
+    while done.len() < groups.len() {
+        let ready: Vec<MachiningFeatureId> = groups
+            .iter()
+            .copied()
+            .filter(|g| !done.contains(g) && preds[g].iter().all(|p| done.contains(p)))
+            .collect();
+        if ready.is_empty() {
+            let rest: Vec<MachiningFeatureId> = groups
+                .iter()
+                .copied()
+                .filter(|g| !done.contains(g))
+                .collect();
+            return Err(OrderError::Cycle(rest));
+        }
+        let key = |g: MachiningFeatureId| {
+            let ms = members(g);
+            let first = ms.first().map(|i| &plan.operations[*i]);
+            let change = match (&tool, first) {
+                (Some(t), Some(o)) => usize::from(*t != o.tool),
+                _ => 0,
+            };
+            let travel = match (pos, first) {
+                (Some(p), Some(o)) => p.distance(o.start),
+                _ => 0.0,
+            };
+            (change, travel, g)
+        };
+        let best = ready
+            .iter()
+            .copied()
+            .min_by(|a, b| {
+                let (ka, kb) = (key(*a), key(*b));
+                ka.0.cmp(&kb.0)
+                    .then(ka.1.total_cmp(&kb.1))
+                    .then(ka.2.cmp(&kb.2))
+            })
+            .expect("ready is not empty");
+        for i in members(best) {
+            let o = &plan.operations[i];
+            out.push(o.id);
+            tool = Some(o.tool.clone());
+            pos = Some(o.moves.last().map_or(o.start, |m| m.to));
+        }
+        done.insert(best);
+    }
+    Ok(out)
+}

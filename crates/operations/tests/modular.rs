@@ -1,0 +1,354 @@
+//! Independent checks of the modular tool paths on synthetic features:
+//! product distance, floor, coverage, no plunges, climb boundary passes,
+//! mirrored layers, determinism.
+
+mod common;
+
+use common::*;
+use glam::DVec2;
+use thinplan_knowledge::Knowledge;
+use thinplan_operations::{operations, summary, Operations};
+use thinplan_plan::{Adjacency, MachiningFeature, Region3};
+
+fn run(f: MachiningFeature) -> (MachiningFeature, Operations, Knowledge) {
+    let k = Knowledge::builtin().unwrap();
+    let plan = plan_with(vec![f.clone()]);
+    let ops = operations(&plan, &k).unwrap();
+    assert!(
+        ops.refusals.is_empty(),
+        "refused: {:?}\nwarnings: {:?}",
+        ops.refusals,
+        ops.warnings
+    );
+    assert!(!ops.operations.is_empty());
+    (f, ops, k)
+}
+
+/// (a) no tool centre of a feed move is closer than r to a product edge;
+/// nothing below the floor; rapids only above the feature.
+fn check_product_and_floor(f: &MachiningFeature, ops: &Operations, k: &Knowledge) {
+    let product: Vec<_> = edges(f)
+        .into_iter()
+        .filter(|e| e.3 == Adjacency::Product)
+        .collect();
+    for op in &ops.operations {
+        let r = radius(k, op);
+        for (p, dir, region) in walk(op, 0.05) {
+            if region == Region3::Rapid {
+                // Vertical retracts may start low; sideways rapids run above.
+                if dir != DVec2::ZERO {
+                    assert!(p.z >= f.shape.z_max - 1e-9, "{}: rapid at z {}", op.id, p.z);
+                }
+                continue;
+            }
+            assert!(
+                p.z >= f.shape.z_min - 1e-9,
+                "{}: below the floor: {p}",
+                op.id
+            );
+            for &(a, b, bulge, _) in &product {
+                let q = closest_on_edge(p.truncate(), a, b, bulge);
+                let d = q.distance(p.truncate());
+                let slack = 1e-6;
+                assert!(
+                    d >= r - slack,
+                    "{} {:?}: centre {p} is {d} from product edge {a}→{b}, r = {r}",
+                    op.id,
+                    region
+                );
+            }
+        }
+    }
+}
+
+/// (b) coverage: at the final depth every region sample (0.2 mm grid) is
+/// within r of a cutting move at that depth.
+fn check_coverage(f: &MachiningFeature, ops: &Operations, k: &Knowledge) {
+    let z = f.shape.z_min;
+    let mut segs = Vec::new();
+    let mut r = f64::INFINITY;
+    for op in &ops.operations {
+        r = r.min(radius(k, op));
+        let pts = walk(op, 0.02);
+        for w in pts.windows(2) {
+            let (a, b) = (w[0].0, w[1].0);
+            if is_cutting(w[1].2) && (a.z - z).abs() < 1e-9 && (b.z - z).abs() < 1e-9 {
+                segs.push((a.truncate(), b.truncate()));
+            }
+        }
+    }
+    assert!(!segs.is_empty(), "no cutting move at the floor z {z}");
+    let idx = LevelIndex::new(&segs, r + 1.0);
+    let polys = region_polys(f);
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for p in polys.iter().flatten() {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let mut worst = (0.0, DVec2::ZERO);
+    let mut y = lo.y + 0.1;
+    while y < hi.y {
+        let mut x = lo.x + 0.1;
+        while x < hi.x {
+            let p = DVec2::new(x, y);
+            if inside(p, &polys) {
+                let d = idx.nearest(p);
+                if d > worst.0 {
+                    worst = (d, p);
+                }
+            }
+            x += 0.2;
+        }
+        y += 0.2;
+    }
+    // 1e-4: chords of sampled arcs (0.02 mm) lie inside the true arcs.
+    assert!(
+        worst.0 <= r + 1e-4,
+        "region point {} is {} from every cutting move at the floor (r = {r})",
+        worst.1,
+        worst.0
+    );
+}
+
+/// (c) no plunge: a cutting move that descends has a horizontal run with
+/// slope at most the ramp angle.
+fn check_no_plunge(ops: &Operations, angle_deg: f64) {
+    let tan = angle_deg.to_radians().tan();
+    for op in &ops.operations {
+        let mut from = op.start;
+        for m in &op.moves {
+            let dz = from.z - m.to.z;
+            if is_cutting(m.region) && dz > 1e-9 {
+                let pts = move_points(from, m, 0.01);
+                let mut h = 0.0;
+                let mut prev = from;
+                for p in pts {
+                    h += (p - prev).truncate().length();
+                    prev = p;
+                }
+                assert!(
+                    dz <= h * tan + 1e-6,
+                    "{}: a {:?} move descends {dz} over {h} horizontally",
+                    op.id,
+                    m.region
+                );
+            }
+            from = m.to;
+        }
+    }
+}
+
+/// (d) boundary passes along product are climb (M3): the product lies on
+/// the right of the travel.
+fn check_climb(f: &MachiningFeature, ops: &Operations, k: &Knowledge) -> usize {
+    let product: Vec<_> = edges(f)
+        .into_iter()
+        .filter(|e| e.3 == Adjacency::Product)
+        .collect();
+    let mut checked = 0;
+    for op in &ops.operations {
+        let r = radius(k, op);
+        for (p, dir, region) in walk(op, 0.25) {
+            if region != Region3::Boundary || dir == DVec2::ZERO {
+                continue;
+            }
+            let p2 = p.truncate();
+            let (q, d) = product
+                .iter()
+                .map(|&(a, b, bulge, _)| {
+                    let q = closest_on_edge(p2, a, b, bulge);
+                    (q, q.distance(p2))
+                })
+                .min_by(|x, y| x.1.total_cmp(&y.1))
+                .unwrap();
+            if (d - r).abs() > 1e-3 {
+                continue; // a run-up or run-off, not along the product
+            }
+            let towards_product = (q - p2).normalize();
+            // Right of travel: cross(dir, n) < 0.
+            assert!(
+                dir.perp_dot(towards_product) < -0.5,
+                "{}: boundary move at {p} is not climb (dir {dir}, product side {towards_product})",
+                op.id
+            );
+            checked += 1;
+        }
+    }
+    checked
+}
+
+fn all_checks(f: MachiningFeature) -> (Operations, Knowledge) {
+    let (f, ops, k) = run(f);
+    check_product_and_floor(&f, &ops, &k);
+    check_coverage(&f, &ops, &k);
+    check_no_plunge(&ops, 3.0);
+    (ops, k)
+}
+
+#[test]
+fn open_step_beside_a_wall() {
+    let (ops, k) = all_checks(step(0));
+    let n = check_climb(&step(0), &ops, &k);
+    assert!(n > 100, "only {n} boundary samples along the product");
+    let op = &ops.operations[0];
+    assert_eq!(op.method, "partially_open");
+    // Largest tool that fits: Ø20.
+    assert_eq!(op.tool, "em20");
+    let s = summary(op);
+    eprintln!("step: {s:?} warnings {:?}", ops.warnings);
+    // Finishing conditions only on boundary moves.
+    let fin = op.provenance.values["feed_finish_mm_min"];
+    for m in &op.moves {
+        if m.region == Region3::Boundary {
+            assert_eq!(m.feed, fin);
+        } else if m.region != Region3::Rapid {
+            assert!(m.feed > fin);
+        }
+    }
+}
+
+#[test]
+fn closed_pocket_with_product_floor() {
+    let (ops, k) = all_checks(pocket(0));
+    assert!(check_climb(&pocket(0), &ops, &k) > 100);
+    // The corner radius 8 rules out the Ø20: the Ø12 is used.
+    assert!(ops.operations.iter().all(|o| o.tool == "em12"));
+    // A main operation and a separate bottom layer.
+    assert_eq!(ops.operations.len(), 2, "{:?}", ops.warnings);
+    assert!(ops.operations[1].provenance.rule.ends_with("bottom_layer"));
+    for o in &ops.operations {
+        eprintln!("pocket: {:?} {}", summary(o), o.provenance.note);
+    }
+    // True arcs reach the program (the boundary pass follows the fillets).
+    assert!(ops.operations[0].moves.iter().any(|m| m.arc.is_some()));
+}
+
+#[test]
+fn l_shape_with_an_island() {
+    let (ops, k) = all_checks(l_with_island(0));
+    assert!(check_climb(&l_with_island(0), &ops, &k) > 100);
+    for o in &ops.operations {
+        eprintln!("L: {:?}", summary(o));
+    }
+}
+
+#[test]
+fn feature_edge_lets_the_tool_cross_half_its_diameter_at_most() {
+    let f = with_feature_edge(0);
+    let (ops, k) = all_checks(f.clone());
+    check_climb(&f, &ops, &k);
+    for op in &ops.operations {
+        let r = radius(&k, op);
+        for (p, _, region) in walk(op, 0.1) {
+            if region == Region3::Rapid {
+                continue;
+            }
+            // The Feature edge is x = 60 for y in [0, 40]: the tool's edge
+            // passes it by at most r (the centre stays at x ≤ 60).
+            if p.y > 0.0 && p.y < 40.0 {
+                assert!(
+                    p.x <= 60.0 + 1e-6,
+                    "{}: centre {p} beyond the feature edge",
+                    op.id
+                );
+            }
+            let _ = r;
+        }
+    }
+}
+
+#[test]
+fn alternate_layers_are_mirrored() {
+    let (f, ops, _k) = run(open_block(0));
+    check_no_plunge(&ops, 3.0);
+    let op = &ops.operations[0];
+    assert!(
+        op.provenance.note.contains("mirror=alternate"),
+        "{}",
+        op.provenance.note
+    );
+    // Flat rest moves per z-level, as xy points in order.
+    let mut levels: Vec<(f64, Vec<DVec2>)> = Vec::new();
+    let mut from = op.start;
+    for m in &op.moves {
+        if m.region == Region3::Rest && (from.z - m.to.z).abs() < 1e-12 {
+            match levels.last_mut() {
+                Some((z, pts)) if (*z - m.to.z).abs() < 1e-12 => pts.push(m.to.truncate()),
+                _ => levels.push((m.to.z, vec![from.truncate(), m.to.truncate()])),
+            }
+        }
+        from = m.to;
+    }
+    let levels: Vec<_> = {
+        // Ramps end with a flat return; keep each level's pattern from
+        // where the ramp finished (the last run of flat moves).
+        let mut by_z: Vec<(f64, Vec<DVec2>)> = Vec::new();
+        for (z, pts) in levels {
+            match by_z.last_mut() {
+                Some((zz, p)) if (*zz - z).abs() < 1e-12 => *p = pts,
+                _ => by_z.push((z, pts)),
+            }
+        }
+        by_z
+    };
+    assert!(levels.len() >= 2, "levels: {}", levels.len());
+    let a = &levels[0].1;
+    let b = &levels[1].1;
+    // The second level retraces the first backwards (after its ramp's
+    // flat return, so compare the tails).
+    let mut ra: Vec<DVec2> = a.clone();
+    ra.reverse();
+    assert!(
+        b.len() >= ra.len(),
+        "level 2 has {} points, level 1 {}",
+        b.len(),
+        a.len()
+    );
+    let tail = &b[b.len() - ra.len()..];
+    for (p, q) in ra.iter().zip(tail) {
+        assert!(p.distance(*q) < 1e-6, "{p} vs {q}");
+    }
+    // And it starts where the first ended: no link between them.
+    assert!(
+        b[0].distance(*a.last().unwrap()) < 1e-6 || tail[0].distance(*a.last().unwrap()) < 1e-6
+    );
+    let _ = f;
+}
+
+#[test]
+fn same_plan_same_operations_twice() {
+    let k = Knowledge::builtin().unwrap();
+    let plan = plan_with(vec![
+        step(0),
+        pocket(1),
+        l_with_island(2),
+        with_feature_edge(3),
+    ]);
+    let a = operations(&plan, &k).unwrap();
+    let b = operations(&plan, &k).unwrap();
+    assert_eq!(format!("{a:?}"), format!("{b:?}"));
+    let mut p = plan.clone();
+    a.apply_to(&mut p);
+    let order = thinplan_operations::order(&p).unwrap();
+    thinplan_operations::order::apply_order(&mut p, order);
+    assert_eq!(p.operation_order.len(), p.operations.len());
+    let mut total = 0.0;
+    for o in &p.operations {
+        let s = summary(o);
+        total += s.time_s;
+        eprintln!(
+            "{} {} {} {} layers {} length {:.1} mm time {:.2} s",
+            s.id, s.feature, s.tool, s.pattern, s.layers, s.length_mm, s.time_s
+        );
+    }
+    eprintln!("total {total:.1} s");
+}
+
+#[test]
+fn a_plan_without_resolve_is_an_error() {
+    let k = Knowledge::builtin().unwrap();
+    let mut plan = plan_with(vec![step(0)]);
+    plan.stages_done
+        .retain(|s| *s != thinplan_plan::Stage::Resolve);
+    assert!(operations(&plan, &k).is_err());
+}
