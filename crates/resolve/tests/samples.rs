@@ -41,7 +41,10 @@ fn pts(l: &thinplan_plan::ProfileLoop) -> Vec<[f64; 2]> {
 fn feature_volume(f: &MachiningFeature) -> f64 {
     let r = &f.shape.region;
     let a = loop_area(&pts(&r.outer)).abs()
-        - r.holes.iter().map(|h| loop_area(&pts(h)).abs()).sum::<f64>();
+        - r.holes
+            .iter()
+            .map(|h| loop_area(&pts(h)).abs())
+            .sum::<f64>();
     a * (f.shape.z_max - f.shape.z_min)
 }
 
@@ -133,7 +136,10 @@ fn part_and_features_make_up_the_blank() {
             s.plan.machining_features.len(),
             err
         );
-        assert!(err.abs() < 1e-3, "{name}: part + features − blank = {err:.3e} of the blank");
+        assert!(
+            err.abs() < 1e-3,
+            "{name}: part + features − blank = {err:.3e} of the blank"
+        );
     }
 }
 
@@ -167,7 +173,10 @@ fn features_overlap_neither_the_product_nor_each_other() {
             }
         }
         // Points within the mesh's chord of a curved face may disagree.
-        assert!(both <= n / 500, "{name}: {both} of {n} points in the part and a feature");
+        assert!(
+            both <= n / 500,
+            "{name}: {both} of {n} points in the part and a feature"
+        );
         assert!(none <= n / 500, "{name}: {none} of {n} points in neither");
     }
 }
@@ -177,9 +186,16 @@ fn constraints_stay_acyclic_and_adjacency_is_complete() {
     for name in SAMPLES {
         let s = planned(name);
         let up = s.plan.setup.up;
-        assert!(acyclic(&s.plan), "{name}: machining constraints have a cycle");
+        assert!(
+            acyclic(&s.plan),
+            "{name}: machining constraints have a cycle"
+        );
         for f in &s.plan.machining_features {
-            assert!((f.shape.frame.z - up).length() < 1e-9, "{name}: {} not along up", f.id);
+            assert!(
+                (f.shape.frame.z - up).length() < 1e-9,
+                "{name}: {} not along up",
+                f.id
+            );
             assert_eq!(f.side_adjacency.len(), f.shape.region.outer.vertices.len());
             assert_eq!(f.hole_adjacency.len(), f.shape.region.holes.len());
             for (h, a) in f.shape.region.holes.iter().zip(&f.hole_adjacency) {
