@@ -37,8 +37,7 @@ fn edit(dir: &Path, from: &str, to: &str) {
 
 fn errors(dir: &Path) -> String {
     Knowledge::load_dir(dir)
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .iter()
         .map(|e| format!("{e:?} {e}"))
         .collect::<Vec<_>>()
