@@ -307,3 +307,57 @@ fn an_unknown_post_field_and_a_duplicate_post_id_are_refused() {
         "{all:?}"
     );
 }
+
+#[test]
+fn broken_methods_are_refused_with_every_problem() {
+    let d = copy_of_knowledge("methods");
+    let f = d.join(METHODS_FILE);
+    let text = std::fs::read_to_string(&f).unwrap();
+    // Half the tool diameter is the most a tool may cross into a neighbour;
+    // a plunge (0°) is no entry; the closed-pocket method removed leaves
+    // closed profiles without a method.
+    let broken = text.replacen("feature: 0.5", "feature: 0.8", 1).replacen(
+        "Ramp(angle_deg: 3.0)",
+        "Ramp(angle_deg: 0.0)",
+        1,
+    );
+    let cut = broken.find("id: \"closed_pocket\"").unwrap();
+    let start = broken[..cut].rfind("        (").unwrap();
+    let end = broken.rfind("    ],").unwrap();
+    let broken = format!("{}{}", &broken[..start], &broken[end..]);
+    std::fs::write(&f, broken).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    let all: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+    let text = all.join("\n");
+    assert!(text.contains("overhang.feature 0.8"), "{text}");
+    assert!(text.contains("entry angle 0°"), "{text}");
+    assert!(text.contains("Closed sides"), "{text}");
+    assert!(text.contains("methods.ron"), "{text}");
+}
+
+#[test]
+fn a_misspelt_method_field_names_the_file() {
+    let d = copy_of_knowledge("methods-field");
+    let f = d.join(METHODS_FILE);
+    let text = std::fs::read_to_string(&f).unwrap();
+    std::fs::write(&f, text.replacen("corner_rounding:", "corner_roundin:", 1)).unwrap();
+    let errors = Knowledge::load_dir(&d).unwrap_err();
+    let text: String = errors.iter().map(|e| format!("{e:?} {e}")).collect();
+    assert!(text.contains("corner_roundin"), "{text}");
+    assert!(text.contains("methods.ron"), "{text}");
+}
+
+#[test]
+fn every_adjacency_finds_a_method() {
+    let k = Knowledge::builtin().unwrap();
+    for bottom in [true, false] {
+        for sides in [
+            SidesMatch::Open,
+            SidesMatch::PartiallyOpen,
+            SidesMatch::Closed,
+        ] {
+            assert!(k.methods.for_feature(bottom, sides).is_some());
+        }
+    }
+    assert!(k.methods.problems().is_empty());
+}

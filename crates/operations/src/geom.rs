@@ -387,9 +387,14 @@ pub fn boundary_distance(p: DVec2, polys: &[Vec<DVec2>]) -> f64 {
 }
 
 /// Whether the segment a→b stays inside (sampled every `step`).
+/// Points on the boundary (within 1e-6) count as inside: step-overs of
+/// parallel passes run along it.
 pub fn segment_inside(a: DVec2, b: DVec2, polys: &[Vec<DVec2>], step: f64) -> bool {
     let k = (a.distance(b) / step).ceil().max(1.0) as usize;
-    (0..=k).all(|j| inside(a.lerp(b, j as f64 / k as f64), polys))
+    (0..=k).all(|j| {
+        let p = a.lerp(b, j as f64 / k as f64);
+        inside(p, polys) || boundary_distance(p, polys) < 1e-6
+    })
 }
 
 /// Edges of a feature's region with their adjacency: the outer loop's from

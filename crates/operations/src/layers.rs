@@ -446,10 +446,7 @@ fn parallel_blocks(
         return (blocks, n);
     }
     let mut last_end: Option<f64> = None;
-    loop {
-        let Some(li) = (0..intervals.len()).find(|&l| used[l].iter().any(|u| !u)) else {
-            break;
-        };
+    while let Some(li) = (0..intervals.len()).find(|&l| used[l].iter().any(|u| !u)) {
         // The interval whose end is nearest to where the last block ended.
         let ii = (0..intervals[li].len())
             .filter(|&i| !used[li][i])
@@ -560,7 +557,7 @@ pub(crate) fn feature_operations(f: &MachiningFeature, env: &Env) -> Result<Made
     if edges[0].0.len() < 2 {
         return Err("its profile has fewer than two vertices".into());
     }
-    if !(f.shape.z_max > f.shape.z_min) {
+    if f.shape.z_max.partial_cmp(&f.shape.z_min) != Some(std::cmp::Ordering::Greater) {
         return Err(format!(
             "empty depth range [{}, {}]",
             f.shape.z_min, f.shape.z_max

@@ -328,6 +328,7 @@ fn cut_prefix(p: &[DVec2], len: f64) -> Vec<DVec2> {
 /// A helix of radius `rho` about `centre` from `z_from` to `z_to`, starting
 /// and ending at `centre + (rho, 0)`, then a flat circle at `z_to`; slope
 /// never steeper than `angle`. Counter-clockwise when `ccw`.
+#[allow(clippy::too_many_arguments)]
 pub fn helix(
     b: &mut Builder,
     centre: DVec2,
