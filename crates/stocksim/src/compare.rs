@@ -4,8 +4,8 @@
 
 use std::collections::VecDeque;
 
-use serde::Serialize;
 use glam::DVec2;
+use serde::Serialize;
 use thinplan_brep::{tessellate, Brep, Mesh, TessTolerance};
 
 use crate::tools::ToolShape;
@@ -27,7 +27,12 @@ pub struct PartField {
 
 /// The part's height field by vertical rays (see [`PartField`]). Returns the
 /// field and warnings (faces that failed to tessellate).
-pub fn part_heights(brep: &Brep, grid: &Grid, floor: f64, lateral: f64) -> (PartField, Vec<String>) {
+pub fn part_heights(
+    brep: &Brep,
+    grid: &Grid,
+    floor: f64,
+    lateral: f64,
+) -> (PartField, Vec<String>) {
     let tol = TessTolerance {
         chord: (lateral / 5.0).clamp(1e-4, 0.01),
         angle: 0.2,
@@ -36,7 +41,9 @@ pub fn part_heights(brep: &Brep, grid: &Grid, floor: f64, lateral: f64) -> (Part
     let warnings = mesh
         .failed_faces
         .iter()
-        .map(|(f, e)| format!("part face {f} not tessellated ({e}); its top is missing from the comparison"))
+        .map(|(f, e)| {
+            format!("part face {f} not tessellated ({e}); its top is missing from the comparison")
+        })
         .collect();
     let top = raster(&mesh, grid, floor, DVec2::ZERO);
     let mut lo = top.clone();
@@ -65,7 +72,8 @@ fn raster(mesh: &Mesh, grid: &Grid, floor: f64, off: DVec2) -> Vec<f32> {
         }
         let lo = a2.min(b2).min(c2);
         let hi = a2.max(b2).max(c2);
-        let (Some((i0, i1)), Some((j0, j1))) = (grid.cols(lo.x, hi.x), grid.rows(lo.y, hi.y)) else {
+        let (Some((i0, i1)), Some((j0, j1))) = (grid.cols(lo.x, hi.x), grid.rows(lo.y, hi.y))
+        else {
             continue;
         };
         // Inclusive edges (a ray on a shared edge hits both triangles, same z).
@@ -145,7 +153,13 @@ fn sphere_offsets(r: f64, cell: f64) -> Vec<(isize, isize, f32)> {
 }
 
 /// max (`dilate`) of `f(q+δ) − h(δ)`, or min of `f(q+δ) + h(δ)`, over the offsets.
-fn offsets_filter(f: &[f32], w: usize, h: usize, offs: &[(isize, isize, f32)], dilate: bool) -> Vec<f32> {
+fn offsets_filter(
+    f: &[f32],
+    w: usize,
+    h: usize,
+    offs: &[(isize, isize, f32)],
+    dilate: bool,
+) -> Vec<f32> {
     let mut out = f.to_vec();
     for j in 0..h {
         for i in 0..w {
@@ -172,7 +186,11 @@ fn offsets_filter(f: &[f32], w: usize, h: usize, offs: &[(isize, isize, f32)], d
 /// it), by rows: the disc is a stack of row segments, each a sliding window.
 fn disc_filter(f: &[f32], w: usize, h: usize, radius: f64, max: bool) -> Vec<f32> {
     let m = (radius + 1e-9).floor().max(0.0) as usize;
-    let half = |dj: usize| ((radius * radius - (dj * dj) as f64).max(0.0) + 1e-9).sqrt().floor() as usize;
+    let half = |dj: usize| {
+        ((radius * radius - (dj * dj) as f64).max(0.0) + 1e-9)
+            .sqrt()
+            .floor() as usize
+    };
     let mut out = f.to_vec();
     let mut widths: Vec<usize> = (0..=m).map(half).collect();
     widths.sort_unstable();
@@ -317,7 +335,12 @@ pub fn regions(
             worst_mm: -1.0,
             at: [0.0; 2],
             line: None,
-            bbox: [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY],
+            bbox: [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ],
         };
         while let Some(k) = stack.pop() {
             let (i, j) = (k % grid.nx, k / grid.nx);

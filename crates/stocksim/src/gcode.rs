@@ -49,7 +49,11 @@ pub enum MoveKind {
     Line,
     /// G2 (`ccw == false`) or G3, in the XY plane, Z moving linearly (helix).
     /// `sweep` is the signed angle turned (positive counter-clockwise), rad.
-    Arc { center: DVec2, ccw: bool, sweep: f64 },
+    Arc {
+        center: DVec2,
+        ccw: bool,
+        sweep: f64,
+    },
 }
 
 /// Spindle state during a move.
@@ -164,9 +168,10 @@ pub fn parse(text: &str, file: &str) -> Result<Program, GcodeError> {
     for (i, raw) in text.lines().enumerate() {
         let line_no = i + 1;
         let trimmed = raw.trim();
-        if trimmed.starts_with('%') {
+        if let Some(rest) = trimmed.strip_prefix('%') {
             // `%` opens and closes the program; anything after the closing one is ignored.
-            if trimmed != "%" && !trimmed[1..].trim_start().starts_with(['(', ';']) {
+            let rest = rest.trim_start();
+            if !rest.is_empty() && !rest.starts_with(['(', ';']) {
                 let col = 1 + raw.chars().take_while(|c| c.is_whitespace()).count() + 1;
                 return Err(m.err(line_no, col, "text after `%` on the same line"));
             }
@@ -214,7 +219,9 @@ fn tokenize(raw: &str, line: usize, file: &str) -> Result<Vec<Word>, GcodeError>
         } else if c == '(' {
             match chars[i + 1..].iter().position(|&d| d == ')' || d == '(') {
                 Some(p) if chars[i + 1 + p] == ')' => i += p + 2,
-                Some(p) => return Err(err(i + 2 + p, "nested comment `(` inside a comment".into())),
+                Some(p) => {
+                    return Err(err(i + 2 + p, "nested comment `(` inside a comment".into()))
+                }
                 None => return Err(err(col, "comment `(` is not closed on this line".into())),
             }
         } else if c.is_ascii_alphabetic() {
@@ -240,7 +247,10 @@ fn tokenize(raw: &str, line: usize, file: &str) -> Result<Vec<Word>, GcodeError>
             if digits == 0 {
                 return Err(err(
                     start + 1,
-                    format!("word `{letter}` needs a number (found {})", found(&chars, start)),
+                    format!(
+                        "word `{letter}` needs a number (found {})",
+                        found(&chars, start)
+                    ),
                 ));
             }
             let s: String = chars[start..i].iter().collect();
@@ -252,7 +262,10 @@ fn tokenize(raw: &str, line: usize, file: &str) -> Result<Vec<Word>, GcodeError>
             }
             words.push(Word { letter, value, col });
         } else {
-            return Err(err(col, format!("unexpected character `{}`", c.escape_default())));
+            return Err(err(
+                col,
+                format!("unexpected character `{}`", c.escape_default()),
+            ));
         }
     }
     Ok(words)
@@ -375,7 +388,8 @@ impl Machine {
                 }
                 'M' => {
                     let m = w.value.round();
-                    if (m - w.value).abs() > 1e-9 || ![2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 9.0, 30.0].contains(&m)
+                    if (m - w.value).abs() > 1e-9
+                        || ![2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 9.0, 30.0].contains(&m)
                     {
                         return Err(self.err(
                             line,
@@ -405,7 +419,11 @@ impl Machine {
                         return Err(self.err(line, w.col, what));
                     };
                     if vals[k].is_some() {
-                        return Err(self.err(line, w.col, format!("word `{c}` appears twice in one block")));
+                        return Err(self.err(
+                            line,
+                            w.col,
+                            format!("word `{c}` appears twice in one block"),
+                        ));
                     }
                     vals[k] = Some(*w);
                 }
@@ -422,7 +440,11 @@ impl Machine {
                 return Err(self.err(line, o.col, "`O` (program number) must start the line"));
             }
             if words.len() > 1 + usize::from(n_first) {
-                return Err(self.err(line, o.col, "`O` (program number) must be alone on its line"));
+                return Err(self.err(
+                    line,
+                    o.col,
+                    "`O` (program number) must be alone on its line",
+                ));
             }
             return Ok(());
         }
@@ -531,7 +553,11 @@ impl Machine {
                 ));
             };
             if motion < 2 && any_arc {
-                let w = arc_words.iter().flatten().next().map_or(first_col, |w| w.col);
+                let w = arc_words
+                    .iter()
+                    .flatten()
+                    .next()
+                    .map_or(first_col, |w| w.col);
                 return Err(self.err(line, w, "`I`/`J`/`R` are only read with G2/G3"));
             }
             let k = scale(self.inch);
@@ -620,7 +646,11 @@ impl Machine {
                     return Err(self.err(
                         line,
                         rw.col,
-                        format!("arc radius {} is smaller than half the chord {}", fmt_num(rad.abs()), fmt_num(half)),
+                        format!(
+                            "arc radius {} is smaller than half the chord {}",
+                            fmt_num(rad.abs()),
+                            fmt_num(half)
+                        ),
                     ));
                 }
                 let h = h2.max(0.0).sqrt();
@@ -633,7 +663,10 @@ impl Machine {
                 if i.is_none() && j.is_none() {
                     return Err(self.err(line, col, "an arc needs `I`/`J` (centre) or `R`"));
                 }
-                s + DVec2::new(i.map_or(0.0, |w| w.value * k), j.map_or(0.0, |w| w.value * k))
+                s + DVec2::new(
+                    i.map_or(0.0, |w| w.value * k),
+                    j.map_or(0.0, |w| w.value * k),
+                )
             }
         };
         let r0 = (s - center).length();

@@ -152,7 +152,12 @@ impl Simulation {
 }
 
 /// Replays `program` on a box blank and compares the stock with `part`.
-pub fn simulate(part: &Brep, program: &Program, tools: &ToolLibrary, cfg: &SimConfig) -> Result<Simulation, SimError> {
+pub fn simulate(
+    part: &Brep,
+    program: &Program,
+    tools: &ToolLibrary,
+    cfg: &SimConfig,
+) -> Result<Simulation, SimError> {
     if !(cfg.tol.is_finite() && cfg.tol >= 0.0) {
         return Err(SimError(format!("tolerance {} must be ≥ 0", cfg.tol)));
     }
@@ -206,11 +211,21 @@ pub fn simulate(part: &Brep, program: &Program, tools: &ToolLibrary, cfg: &SimCo
     };
     let classes = compare::classify(&stock.top, &field, &ideal, cfg.tol);
     let summary = |class| {
-        let regs = compare::regions(&classes, class, &stock.top, &part_top, &stock.last_line, &grid);
+        let regs = compare::regions(
+            &classes,
+            class,
+            &stock.top,
+            &part_top,
+            &stock.last_line,
+            &grid,
+        );
         let cells: usize = regs.iter().map(|r| r.cells).sum();
-        let worst = regs
-            .iter()
-            .min_by(|a, b| b.worst_mm.total_cmp(&a.worst_mm).then(a.at[1].total_cmp(&b.at[1])).then(a.at[0].total_cmp(&b.at[0])));
+        let worst = regs.iter().min_by(|a, b| {
+            b.worst_mm
+                .total_cmp(&a.worst_mm)
+                .then(a.at[1].total_cmp(&b.at[1]))
+                .then(a.at[0].total_cmp(&b.at[0]))
+        });
         DefectSummary {
             cells,
             area_mm2: cells as f64 * grid.cell_area(),

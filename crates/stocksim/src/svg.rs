@@ -51,7 +51,10 @@ pub fn top_view(sim: &Simulation) -> String {
         h + legend + 20.0
     );
     let _ = writeln!(s, "<title>thinplan stock simulation, top view</title>");
-    let _ = writeln!(s, r##"<rect x="10" y="10" width="{w:.2}" height="{h:.2}" fill="#ffffff" stroke="#000000" stroke-width="0.5"/>"##);
+    let _ = writeln!(
+        s,
+        r##"<rect x="10" y="10" width="{w:.2}" height="{h:.2}" fill="#ffffff" stroke="#000000" stroke-width="0.5"/>"##
+    );
     let cs = g.cell * scale;
     for j in 0..g.ny {
         let y = 10.0 + h - (j + 1) as f64 * cs;
@@ -78,13 +81,34 @@ pub fn top_view(sim: &Simulation) -> String {
     let r = &sim.report;
     let ly = h + 30.0;
     let items = [
-        (GOUGE, format!("gouge: {} cells, worst {:.3} mm", r.gouges.cells, r.gouges.worst_mm)),
-        (MISSED, format!("missed: {} cells, {:.1} mm³", r.leftover_missed.cells, r.leftover_missed.volume_mm3)),
-        (UNREACHABLE, format!("unreachable: {} cells, {:.1} mm³", r.leftover_unreachable.cells, r.leftover_unreachable.volume_mm3)),
+        (
+            GOUGE,
+            format!(
+                "gouge: {} cells, worst {:.3} mm",
+                r.gouges.cells, r.gouges.worst_mm
+            ),
+        ),
+        (
+            MISSED,
+            format!(
+                "missed: {} cells, {:.1} mm³",
+                r.leftover_missed.cells, r.leftover_missed.volume_mm3
+            ),
+        ),
+        (
+            UNREACHABLE,
+            format!(
+                "unreachable: {} cells, {:.1} mm³",
+                r.leftover_unreachable.cells, r.leftover_unreachable.volume_mm3
+            ),
+        ),
     ];
     for (k, (col, text)) in items.iter().enumerate() {
         let x = 10.0 + k as f64 * (w / 3.0).max(180.0);
-        let _ = writeln!(s, r#"<rect x="{x:.1}" y="{ly:.1}" width="12" height="12" fill="{col}"/>"#);
+        let _ = writeln!(
+            s,
+            r#"<rect x="{x:.1}" y="{ly:.1}" width="12" height="12" fill="{col}"/>"#
+        );
         let _ = writeln!(
             s,
             r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="12">{}</text>"#,

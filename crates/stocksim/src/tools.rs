@@ -135,7 +135,10 @@ pub fn parse_tool_table(text: &str, file: &str) -> Result<ToolLibrary, GcodeErro
             message: msg,
         };
         let (body, comment) = match raw.find(';') {
-            Some(p) => (&raw[..p], Some((&raw[p + 1..], raw[..p].chars().count() + 2))),
+            Some(p) => (
+                &raw[..p],
+                Some((&raw[p + 1..], raw[..p].chars().count() + 2)),
+            ),
             None => (raw, None),
         };
         let mut t = None;
@@ -150,7 +153,10 @@ pub fn parse_tool_table(text: &str, file: &str) -> Result<ToolLibrary, GcodeErro
             }
             let col = k + 1;
             if !c.is_ascii_alphabetic() {
-                return Err(err(col, format!("unexpected character `{}`", c.escape_default())));
+                return Err(err(
+                    col,
+                    format!("unexpected character `{}`", c.escape_default()),
+                ));
             }
             let letter = c.to_ascii_uppercase();
             if !"TPDXYZABCUVWIJQ".contains(letter) {
@@ -170,7 +176,10 @@ pub fn parse_tool_table(text: &str, file: &str) -> Result<ToolLibrary, GcodeErro
             match letter {
                 'T' => {
                     if v < 1.0 || v.fract() != 0.0 || v > 1e6 {
-                        return Err(err(col, format!("tool number `{s}` must be a whole number ≥ 1")));
+                        return Err(err(
+                            col,
+                            format!("tool number `{s}` must be a whole number ≥ 1"),
+                        ));
                     }
                     t = Some((v as u32, col));
                 }
@@ -198,9 +207,13 @@ pub fn parse_tool_table(text: &str, file: &str) -> Result<ToolLibrary, GcodeErro
                     }
                 }
             }
-            shape.validate().map_err(|m| err(ccol, format!("tool T{num}: {m}")))?;
+            shape
+                .validate()
+                .map_err(|m| err(ccol, format!("tool T{num}: {m}")))?;
         }
-        shape.validate().map_err(|m| err(tcol, format!("tool T{num}: {m}")))?;
+        shape
+            .validate()
+            .map_err(|m| err(tcol, format!("tool T{num}: {m}")))?;
         if lib.insert(num, shape).is_some() {
             return Err(err(tcol, format!("tool T{num} is listed twice")));
         }

@@ -99,7 +99,7 @@ impl Grid {
         let ext = max - min;
         let nx = (ext.x / cell).ceil().max(1.0);
         let ny = (ext.y / cell).ceil().max(1.0);
-        if !(nx * ny <= MAX_CELLS as f64) {
+        if nx * ny > MAX_CELLS as f64 || nx.is_nan() || ny.is_nan() {
             return Err(format!(
                 "a {cell} mm grid over {:.1} × {:.1} mm has {nx} × {ny} cells, more than {MAX_CELLS}; use a larger cell",
                 ext.x, ext.y
@@ -371,11 +371,25 @@ impl ZMap {
 
     /// Sweeps `tool` along an arc at constant Z from `s` turning `sweep` rad
     /// (positive counter-clockwise) about `center`.
-    fn sweep_flat_arc(&mut self, tool: &ToolShape, center: DVec2, s: DVec2, e: DVec2, sweep: f64, z: f64, line: u32) -> CutStats {
+    #[allow(clippy::too_many_arguments)]
+    fn sweep_flat_arc(
+        &mut self,
+        tool: &ToolShape,
+        center: DVec2,
+        s: DVec2,
+        e: DVec2,
+        sweep: f64,
+        z: f64,
+        line: u32,
+    ) -> CutStats {
         let mut st = CutStats::default();
         let r = tool.radius() - RIM_EPS;
         // Counter-clockwise from `from` by `span`.
-        let (from, span) = if sweep >= 0.0 { (s, sweep) } else { (e, -sweep) };
+        let (from, span) = if sweep >= 0.0 {
+            (s, sweep)
+        } else {
+            (e, -sweep)
+        };
         let ra = (s - center).length();
         let a0 = (from - center).to_angle();
         let (mut lo, mut hi) = (s.min(e), s.max(e));
@@ -463,7 +477,11 @@ impl ZMap {
     }
 
     /// Replays a whole program.
-    pub fn replay(&mut self, program: &Program, tools: &ToolLibrary) -> Result<ReplayStats, SimError> {
+    pub fn replay(
+        &mut self,
+        program: &Program,
+        tools: &ToolLibrary,
+    ) -> Result<ReplayStats, SimError> {
         let mut out = ReplayStats::default();
         let mut used = std::collections::BTreeSet::new();
         let mut warned_no_tool = false;
@@ -481,9 +499,21 @@ impl ZMap {
                 // Brought in from above the stock.
                 let above = m.end.z.max(self.blank.max.z + 1.0);
                 DVec3::new(
-                    if m.start.x.is_finite() { m.start.x } else { m.end.x },
-                    if m.start.y.is_finite() { m.start.y } else { m.end.y },
-                    if m.start.z.is_finite() { m.start.z } else { above },
+                    if m.start.x.is_finite() {
+                        m.start.x
+                    } else {
+                        m.end.x
+                    },
+                    if m.start.y.is_finite() {
+                        m.start.y
+                    } else {
+                        m.end.y
+                    },
+                    if m.start.z.is_finite() {
+                        m.start.z
+                    } else {
+                        above
+                    },
                 )
             } else {
                 m.start
@@ -586,7 +616,11 @@ fn min_convex(tool: &ToolShape, k: f64, perp: f64, s0: f64, lo: f64, hi: f64) ->
         }
         let sl = tool.slope_at(rho);
         if sl.is_infinite() {
-            return if ds > 0.0 { f64::INFINITY } else { f64::NEG_INFINITY };
+            return if ds > 0.0 {
+                f64::INFINITY
+            } else {
+                f64::NEG_INFINITY
+            };
         }
         k + sl * ds / rho
     };

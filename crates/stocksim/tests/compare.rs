@@ -63,7 +63,11 @@ fn complete_pocket_is_clean() {
     assert_eq!(r.leftover_unreachable.cells, 0);
     // The pocket: 40 × 20 with R5 corners, 15 deep.
     let area = 40.0 * 20.0 - (4.0 - std::f64::consts::PI) * 25.0;
-    assert!((r.removed_volume_mm3 - area * 15.0).abs() < 120.0 * 0.1 * 15.0, "{}", r.removed_volume_mm3);
+    assert!(
+        (r.removed_volume_mm3 - area * 15.0).abs() < 120.0 * 0.1 * 15.0,
+        "{}",
+        r.removed_volume_mm3
+    );
     assert_eq!(r.tools.len(), 1);
     assert!(r.crashes.is_empty());
     // Deterministic JSON.
@@ -92,9 +96,16 @@ fn a_pass_too_deep_is_a_gouge_at_its_place() {
     assert_eq!(g.regions_total, 1);
     let b = g.regions[0].bbox;
     // The Ø8 pass from x 15 to 45 at y 20 (the move in to it also cuts 0.2 deep).
-    assert!(b[1] >= 15.9 && b[3] <= 24.1 && b[0] >= 10.9 && b[2] <= 49.1, "{b:?}");
+    assert!(
+        b[1] >= 15.9 && b[3] <= 24.1 && b[0] >= 10.9 && b[2] <= 49.1,
+        "{b:?}"
+    );
     let area = 30.0 * 8.0 + std::f64::consts::PI * 16.0;
-    assert!((g.volume_mm3 - area * 0.2).abs() < area * 0.2 * 0.1, "{}", g.volume_mm3);
+    assert!(
+        (g.volume_mm3 - area * 0.2).abs() < area * 0.2 * 0.1,
+        "{}",
+        g.volume_mm3
+    );
     assert_eq!(s.report.leftover_missed.cells, 0);
 }
 
@@ -108,7 +119,10 @@ fn a_missing_pass_is_missed_leftover() {
     assert!(r.leftover_missed.cells > 0);
     assert!((r.leftover_missed.worst_mm - 15.0).abs() < 1e-3);
     let at = r.leftover_missed.worst_at.unwrap();
-    assert!((at[1] - 20.0).abs() < 2.0 && at[0] > 18.0 && at[0] < 42.0, "{at:?}");
+    assert!(
+        (at[1] - 20.0).abs() < 2.0 && at[0] > 18.0 && at[0] < 42.0,
+        "{at:?}"
+    );
     assert_eq!(r.leftover_unreachable.cells, 0);
 }
 
@@ -125,9 +139,17 @@ fn sharp_inside_corners_are_unreachable() {
     // Each corner keeps (R² − πR²/4) × 15.
     let corner = (16.0 - std::f64::consts::PI * 4.0) * 15.0;
     let v = r.leftover_unreachable.volume_mm3;
-    assert!((v - 4.0 * corner).abs() < 0.25 * 4.0 * corner, "{v} vs {}", 4.0 * corner);
+    assert!(
+        (v - 4.0 * corner).abs() < 0.25 * 4.0 * corner,
+        "{v} vs {}",
+        4.0 * corner
+    );
     assert!(r.clean, "unreachable leftover alone is clean");
-    let k = s.classes.iter().filter(|c| **c == CellClass::Unreachable).count();
+    let k = s
+        .classes
+        .iter()
+        .filter(|c| **c == CellClass::Unreachable)
+        .count();
     assert_eq!(k, r.leftover_unreachable.cells);
 }
 
@@ -135,11 +157,18 @@ fn sharp_inside_corners_are_unreachable() {
 fn air_cutting_share() {
     let part = pocket_part(5.0);
     // The clean program plus 100 mm of feed in the air above the part.
-    let prog = pocket_program("5", "5", true).replace("G0 Z25\nM5", "G0 Z25\nG1 X45 Y20 Z30 F1000\nG1 X-55\nG0 Z35\nM5");
+    let prog = pocket_program("5", "5", true).replace(
+        "G0 Z25\nM5",
+        "G0 Z25\nG1 X45 Y20 Z30 F1000\nG1 X-55\nG0 Z35\nM5",
+    );
     let s = sim(&part, &prog);
     let a = &s.report.air_cutting;
     // G1 X45 Y20 Z30 from (45,20,25) rises 5 mm: air too.
-    assert!((a.air_length_mm - 105.0).abs() < 1e-9, "{}", a.air_length_mm);
+    assert!(
+        (a.air_length_mm - 105.0).abs() < 1e-9,
+        "{}",
+        a.air_length_mm
+    );
     let share = 105.0 / s.report.program.feed_length_mm;
     assert!((a.share - share).abs() < 1e-12);
     assert!(s.report.clean);

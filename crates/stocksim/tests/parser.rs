@@ -68,7 +68,10 @@ fn reads_every_supported_word() {
     assert_eq!(m[8].end, DVec3::new(25.4, 25.4, 5.0));
     assert_eq!(m[8].feed, 254.0);
     let feed = p.feed_length();
-    assert!(feed > 0.0 && p.rapid_length() == 0.0, "positioning moves count no length");
+    assert!(
+        feed > 0.0 && p.rapid_length() == 0.0,
+        "positioning moves count no length"
+    );
 }
 
 #[test]
@@ -113,8 +116,18 @@ fn errors_name_line_and_column() {
         ("G0 X0 Y0 Z0\nG1 X1\n", 2, 4, "no feed rate"),
         ("G0 G1 X1\n", 1, 4, "same modal group"),
         ("G91 G0 X1\n", 1, 8, "not yet known"),
-        ("G0 X0 Y0 Z0\nG2 X10 Y0 I3 J0 F10\n", 2, 4, "differs from the radius"),
-        ("G0 X0 Y0 Z0\nG2 X10 Y0 R2 F10\n", 2, 11, "smaller than half the chord"),
+        (
+            "G0 X0 Y0 Z0\nG2 X10 Y0 I3 J0 F10\n",
+            2,
+            4,
+            "differs from the radius",
+        ),
+        (
+            "G0 X0 Y0 Z0\nG2 X10 Y0 R2 F10\n",
+            2,
+            11,
+            "smaller than half the chord",
+        ),
         ("G0 X0 Y0 Z0\nG2 X10 Y0 K3 F10\n", 2, 11, "`K`"),
         ("G0 X0 Y0 Z0\nG1 X1 I2 F10\n", 2, 7, "only read with G2/G3"),
         ("G1 X1 F10 F20\n", 1, 11, "twice"),

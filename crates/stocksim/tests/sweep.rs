@@ -33,10 +33,18 @@ fn area_tol(perimeter: f64, cell: f64) -> f64 {
 #[test]
 fn straight_slot_volume() {
     for cell in [0.2, 0.05] {
-        let (z, st) = run(&header("G1 Z15 F300\nG1 X90\n"), ToolShape::flat(10.0), cell);
+        let (z, st) = run(
+            &header("G1 Z15 F300\nG1 X90\n"),
+            ToolShape::flat(10.0),
+            cell,
+        );
         let exact = 80.0 * 10.0 * 5.0 + PI * 25.0 * 5.0;
         let tol = area_tol(2.0 * 80.0 + PI * 10.0, cell) * 5.0;
-        assert!((st.cut.volume - exact).abs() < tol, "cell {cell}: {} vs {exact} ± {tol}", st.cut.volume);
+        assert!(
+            (st.cut.volume - exact).abs() < tol,
+            "cell {cell}: {} vs {exact} ± {tol}",
+            st.cut.volume
+        );
         assert!((z.volume() - (140.0 * 100.0 * 20.0 - st.cut.volume)).abs() < 1e-3 * exact);
         assert_eq!(z.height_at(DVec2::new(50.0, 30.0)), Some(15.0));
         assert_eq!(z.height_at(DVec2::new(50.0, 35.5)), Some(20.0));
@@ -72,7 +80,11 @@ fn arcs_remove_annular_sectors() {
         let exact = arc_area(20.0, 2.0, theta) * 2.0;
         let perim = 2.0 * theta * 20.0 + 2.0 * PI * 2.0;
         let tol = area_tol(perim, 0.1) * 2.0;
-        assert!((st.cut.volume - exact).abs() < tol, "{arc}: {} vs {exact} ± {tol}", st.cut.volume);
+        assert!(
+            (st.cut.volume - exact).abs() < tol,
+            "{arc}: {} vs {exact} ± {tol}",
+            st.cut.volume
+        );
     }
 }
 
@@ -101,7 +113,11 @@ fn bull_nose_leaves_its_fillet_at_the_slot_wall() {
 fn ramps_leave_the_right_floor() {
     // Flat Ø10 ramp from (10,30,20) down to (90,30,12): on the path line the floor
     // at x is the tip height R ahead (the tool's leading edge cuts lowest).
-    let (z, _) = run(&header("G1 X10 Y30 Z20 F300\nG1 X90 Z12\n"), ToolShape::flat(10.0), 0.1);
+    let (z, _) = run(
+        &header("G1 X10 Y30 Z20 F300\nG1 X90 Z12\n"),
+        ToolShape::flat(10.0),
+        0.1,
+    );
     let k = 8.0 / 80.0;
     for x in [20.05, 40.05, 70.05] {
         let expect = 20.0 - k * (x + 5.0 - 10.0);
@@ -110,7 +126,11 @@ fn ramps_leave_the_right_floor() {
         assert!((got - expect).abs() < 2e-3, "x {x}: {got} vs {expect}");
     }
     // Ball Ø10 on the same ramp: below the tip line by r(1/cos α − 1).
-    let (z, _) = run(&header("G1 X10 Y30 Z20 F300\nG1 X90 Z12\n"), ToolShape::ball(10.0), 0.1);
+    let (z, _) = run(
+        &header("G1 X10 Y30 Z20 F300\nG1 X90 Z12\n"),
+        ToolShape::ball(10.0),
+        0.1,
+    );
     let alpha = k.atan();
     for x in [20.05, 40.05, 70.05] {
         let tip = 20.0 - k * (x - 10.0);
@@ -128,14 +148,22 @@ fn helix_then_circle_leaves_a_flat_annulus() {
     let (z, st) = run(prog, ToolShape::flat(6.0), 0.1);
     let exact = PI * (13.0f64.powi(2) - 7.0f64.powi(2)) * 2.0;
     let tol = area_tol(2.0 * PI * 20.0, 0.1) * 2.0;
-    assert!((st.cut.volume - exact).abs() < tol, "{} vs {exact}", st.cut.volume);
+    assert!(
+        (st.cut.volume - exact).abs() < tol,
+        "{} vs {exact}",
+        st.cut.volume
+    );
     for ang in [0.3f64, 1.7, 4.0] {
         let p = DVec2::new(50.0, 30.0) + 10.0 * DVec2::from_angle(ang);
         assert!((z.height_at(p).unwrap() - 18.0).abs() < 1e-4);
     }
     assert_eq!(z.height_at(DVec2::new(50.0, 30.0)), Some(20.0));
     // The helix alone descends: a quarter turn in, the floor is above 18.
-    let (z, _) = run(&prog.replace("G3 X60 Y30 I-10 J0\nG0", "G0"), ToolShape::flat(6.0), 0.1);
+    let (z, _) = run(
+        &prog.replace("G3 X60 Y30 I-10 J0\nG0", "G0"),
+        ToolShape::flat(6.0),
+        0.1,
+    );
     let mid = z.height_at(DVec2::new(50.0, 40.0)).unwrap();
     assert!(mid > 18.5 && mid < 19.8, "{mid}");
 }
@@ -144,7 +172,11 @@ fn helix_then_circle_leaves_a_flat_annulus() {
 fn rapid_into_stock_and_spindle_off_are_crashes() {
     let prog = header("G0 Z15\nG1 X30 F300\nM5\nG1 X50\nG0 X80\n");
     let (_, st) = run(&prog, ToolShape::flat(10.0), 0.2);
-    let kinds: Vec<_> = st.crashes.iter().map(|c| (c.line, format!("{:?}", c.kind))).collect();
+    let kinds: Vec<_> = st
+        .crashes
+        .iter()
+        .map(|c| (c.line, format!("{:?}", c.kind)))
+        .collect();
     assert_eq!(
         kinds,
         vec![
@@ -162,7 +194,11 @@ fn air_cutting_is_measured() {
     let prog = header("G1 Z15 F300\nG1 X90\nG1 X10\nG1 Z21\nG1 X50\n");
     let (_, st) = run(&prog, ToolShape::flat(10.0), 0.2);
     assert!((st.feed_length - (10.0 + 80.0 + 80.0 + 6.0 + 40.0)).abs() < 1e-9);
-    assert!((st.air_length - (80.0 + 6.0 + 40.0)).abs() < 1e-9, "{}", st.air_length);
+    assert!(
+        (st.air_length - (80.0 + 6.0 + 40.0)).abs() < 1e-9,
+        "{}",
+        st.air_length
+    );
 }
 
 #[test]

@@ -53,16 +53,28 @@ fn tall_rib_roughing_comes_out_exact() {
         sim.cells_per_second() / 1e6,
         sim.compare_time.as_secs_f64()
     );
-    assert!(r.program.feed_length_mm > 40_000.0, "{}", r.program.feed_length_mm);
+    assert!(
+        r.program.feed_length_mm > 40_000.0,
+        "{}",
+        r.program.feed_length_mm
+    );
     assert!(r.crashes.is_empty(), "{:?}", r.crashes);
     assert_eq!(r.gouges.cells, 0, "{:?}", r.gouges);
     assert_eq!(r.leftover_missed.cells, 0, "{:?}", r.leftover_missed);
     assert!(r.clean);
     // The r0.5 corner leaves a fillet at the rib foot: unreachable, thin.
-    assert!(r.leftover_unreachable.worst_mm <= 0.5 + 1e-3, "{:?}", r.leftover_unreachable);
+    assert!(
+        r.leftover_unreachable.worst_mm <= 0.5 + 1e-3,
+        "{:?}",
+        r.leftover_unreachable
+    );
     // Removed = blank − part, less the fillet and the cells' sampling.
     let blank = 160.0 * 40.0 * 92.0;
     let part_v = 160.0 * 40.0 * 20.0 + 120.0 * 1.0 * 72.0;
     let want = blank - part_v;
-    assert!((r.removed_volume_mm3 - want).abs() < 0.005 * want, "{} vs {want}", r.removed_volume_mm3);
+    assert!(
+        (r.removed_volume_mm3 - want).abs() < 0.005 * want,
+        "{} vs {want}",
+        r.removed_volume_mm3
+    );
 }
