@@ -86,6 +86,21 @@ proptest! {
         let ops_of = |f: MachiningFeatureId| -> Vec<usize> {
             plan.operations.iter().filter(|o| o.feature == f).map(|o| pos[&o.id]).collect()
         };
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn root(p: &mut [u32], x: u32) -> u32 {
+            let mut r = x;
+            while p[r as usize] != r {
+                r = p[r as usize];
+            }
+            r
+        }
+        for c in &plan.machining_constraints {
+            if c.kind == ConstraintKind::Simultaneous {
+                let (x, y) = (root(&mut parent, c.first.0), root(&mut parent, c.second.0));
+                parent[x as usize] = y;
+            }
+        }
+        let comp = |f: u32| root(&mut parent.clone(), f);
         for c in &plan.machining_constraints {
             let (a, b) = (ops_of(c.first), ops_of(c.second));
             match c.kind {
@@ -93,10 +108,14 @@ proptest! {
                     prop_assert!(a.iter().max() < b.iter().min(), "before violated: {:?}", c);
                 }
                 ConstraintKind::Simultaneous => {
-                    // Contiguous block.
-                    let mut all: Vec<usize> = a.iter().chain(&b).copied().collect();
-                    all.sort();
-                    prop_assert_eq!(all[all.len() - 1] - all[0] + 1, all.len());
+                    // Everything between them belongs to their simultaneous
+                    // group (the transitive closure of the pairs).
+                    let lo = *a.iter().chain(&b).min().unwrap();
+                    let hi = *a.iter().chain(&b).max().unwrap();
+                    let g = comp(c.first.0);
+                    for id in &order[lo..=hi] {
+                        prop_assert_eq!(comp(by_id[id].feature.0), g);
+                    }
                 }
             }
         }
