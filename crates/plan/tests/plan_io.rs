@@ -187,11 +187,13 @@ fn write_fixture() {
 /// `hole_adjacency`) migrates to an empty adjacency list per hole.
 #[test]
 fn version_1_features_gain_hole_adjacency() {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/plan_v1_features.json");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/plan_v1_features.json");
     let plan = load(&path).unwrap();
     let f = &plan.machining_features[0];
     assert_eq!(f.shape.region.holes.len(), 1);
-    assert_eq!(f.hole_adjacency, vec![Vec::<thinplan_plan::Adjacency>::new()]);
+    assert_eq!(
+        f.hole_adjacency,
+        vec![Vec::<thinplan_plan::Adjacency>::new()]
+    );
     assert_eq!(f.side_adjacency.len(), 4);
 }
