@@ -229,7 +229,8 @@ pub fn simulate(
         DefectSummary {
             cells,
             area_mm2: cells as f64 * grid.cell_area(),
-            volume_mm3: regs.iter().map(|r| r.volume_mm3).sum(),
+            // `+ 0.0`: an empty float sum is −0.0.
+            volume_mm3: regs.iter().map(|r| r.volume_mm3).sum::<f64>() + 0.0,
             worst_mm: worst.map_or(0.0, |r| r.worst_mm),
             worst_at: worst.map(|r| r.at),
             worst_line: worst.and_then(|r| r.line),

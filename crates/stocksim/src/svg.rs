@@ -19,7 +19,7 @@ pub fn top_view(sim: &Simulation) -> String {
     let (w_mm, h_mm) = (g.nx as f64 * g.cell, g.ny as f64 * g.cell);
     let scale = 800.0 / w_mm.max(h_mm).max(1e-9);
     let (w, h) = (w_mm * scale, h_mm * scale);
-    let legend = 70.0;
+    let legend = 80.0;
     let zlo = sim.stock.blank.min.z as f32;
     let zhi = sim.stock.blank.max.z as f32;
     let colour = |k: usize| -> String {
@@ -119,14 +119,19 @@ pub fn top_view(sim: &Simulation) -> String {
     }
     let _ = writeln!(
         s,
-        r#"<text x="10" y="{:.1}" font-family="sans-serif" font-size="12">cell {} mm, tol {} mm, feed {:.0} mm, rapid {:.0} mm, air {:.1} %, removed {:.0} mm³; grey = ok (lighter = higher part), white = through</text>"#,
-        ly + 34.0,
+        r#"<text x="10" y="{:.1}" font-family="sans-serif" font-size="12">cell {} mm, tol {} mm, feed {:.0} mm, rapid {:.0} mm, air {:.1} %, removed {:.0} mm³</text>"#,
+        ly + 30.0,
         r.cell_mm,
         r.tolerance_mm,
         r.program.feed_length_mm,
         r.program.rapid_length_mm,
         r.air_cutting.share * 100.0,
         r.removed_volume_mm3
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="10" y="{:.1}" font-family="sans-serif" font-size="12">grey: within tolerance (lighter = higher part); white: through (no part)</text>"#,
+        ly + 48.0
     );
     s.push_str("</svg>\n");
     s
