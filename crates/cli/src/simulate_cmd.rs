@@ -44,7 +44,8 @@ pub struct SimulateArgs {
 pub fn run(args: &SimulateArgs) -> Result<bool, String> {
     let part = thinplan_import::import(&args.part).map_err(|e| e.to_string())?;
     let prog_name = args.program.display().to_string();
-    let bytes = std::fs::read(&args.program).map_err(|e| format!("{prog_name}: cannot read: {e}"))?;
+    let bytes =
+        std::fs::read(&args.program).map_err(|e| format!("{prog_name}: cannot read: {e}"))?;
     let program = parse_bytes(&bytes, &prog_name).map_err(|e| e.to_string())?;
     let table_path = match &args.tool_table {
         Some(p) => p.clone(),
@@ -75,7 +76,8 @@ pub fn run(args: &SimulateArgs) -> Result<bool, String> {
     };
     let sim = simulate(&part.brep, &program, &tools, &cfg).map_err(|e| e.to_string())?;
     if let Some(out) = &args.svg {
-        std::fs::write(out, sim.svg()).map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
+        std::fs::write(out, sim.svg())
+            .map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
     }
     let r = &sim.report;
     if args.json {
@@ -103,7 +105,10 @@ fn defect(name: &str, d: &DefectSummary, out: &mut String) {
         return;
     }
     let at = d.worst_at.unwrap_or([0.0; 2]);
-    let line = d.worst_line.map(|l| format!(" (line {l})")).unwrap_or_default();
+    let line = d
+        .worst_line
+        .map(|l| format!(" (line {l})"))
+        .unwrap_or_default();
     let _ = writeln!(
         out,
         "  {name}: {} cells in {} patches, {:.2} mm³, worst {:.3} mm at ({:.2}, {:.2}){line}",
@@ -121,7 +126,10 @@ fn summary(part: &str, prog: &str, r: &StockReport) -> String {
     let _ = writeln!(
         s,
         "  program: {} moves, {} tool changes, feed {:.1} mm, rapid {:.1} mm",
-        r.program.moves, r.program.tool_changes, r.program.feed_length_mm, r.program.rapid_length_mm
+        r.program.moves,
+        r.program.tool_changes,
+        r.program.feed_length_mm,
+        r.program.rapid_length_mm
     );
     let _ = writeln!(
         s,

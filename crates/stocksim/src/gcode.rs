@@ -5,6 +5,7 @@
 //! Supported: `%` delimiters, `O` program numbers, `N` words, `( … )` and `;`
 //! comments, G0 G1 G2 G3 (modal; arcs in G17 by incremental `I J` centre or by
 //! `R`, a negative `R` for the long way round), G17 G20 G21 G40 G43 `H` G49
+//! G91.1 (the only arc-centre mode read),
 //! G54–G59 G64 [`P` `Q`] G80 G90 G91 G94, `T` M6, M3 M4 M5 `S`, M8 M9, M2 M30,
 //! `F`. Everything else is an error naming `file:line:column`.
 //!
@@ -296,7 +297,7 @@ struct Machine {
 /// The G codes read, in tenths (G64 = 640).
 const G_KNOWN: &[u32] = &[
     0, 10, 20, 30, 170, 200, 210, 400, 430, 490, 540, 550, 560, 570, 580, 590, 640, 800, 900, 910,
-    940,
+    911, 940,
 ];
 
 fn g_group(g: u32) -> u8 {
@@ -309,6 +310,8 @@ fn g_group(g: u32) -> u8 {
         540..=590 => 6,
         640 => 7,
         900 | 910 => 8,
+        // G91.1: arc centres I J relative to the start, as this reader always takes them.
+        911 => 10,
         _ => 9, // 940
     }
 }

@@ -6,7 +6,7 @@ use thinplan_stocksim::gcode::{parse, parse_bytes, MoveKind, Spindle};
 
 const FULL: &str = "%
 O1234 (header)
-N10 G21 G17 G90 G94 G40 G49 G80 ; modal set-up
+N10 G21 G17 G90 G91.1 G94 G40 G49 G80 ; modal set-up
 G64 P0.01 Q0.01
 G55
 T2 M6
