@@ -16,6 +16,7 @@ use thinplan_plan::Setup;
 
 mod pocket_cmd;
 mod post_cmd;
+mod simulate_cmd;
 
 /// Exit codes (documented in docs/CLI.md).
 mod exit {
@@ -25,6 +26,8 @@ mod exit {
     pub const BAD_INPUT: u8 = 3;
     pub const KNOWLEDGE: u8 = 4;
     pub const OUTPUT: u8 = 5;
+    /// `simulate`: the stock does not match the part (gouge or missed material).
+    pub const NOT_CLEAN: u8 = 6;
 }
 
 #[derive(Parser)]
@@ -95,6 +98,15 @@ enum Command {
         /// Machine-readable summary on stdout; no progress output.
         #[arg(long)]
         json: bool,
+        /// Also write the NC program (through `--post`).
+        #[arg(long)]
+        gcode: Option<PathBuf>,
+        /// Post-processor id from the knowledge's posts/ (default linuxcnc).
+        #[arg(long, default_value = thinplan_knowledge::DEFAULT_POST)]
+        post: String,
+        /// Also write the LinuxCNC tool table the program needs.
+        #[arg(long)]
+        tool_table: Option<PathBuf>,
     },
     /// Recognise stiffness features and their connections (stages 2-3).
     Recognize {
@@ -166,6 +178,14 @@ enum Command {
     },
     /// Write a saved plan's operations as an NC program through a post-processor.
     Post(post_cmd::PostArgs),
+    /// Replay an NC program on a Z-map of the blank and compare the stock
+    /// with the part (gouges, leftover, air cutting); exit 6 when not clean.
+    Simulate(simulate_cmd::SimulateArgs),
+    /// Open the desktop application (the `thinplan-gui` binary beside this one).
+    Gui {
+        /// Part file or builtin:NAME; the bundled sample when omitted.
+        part: Option<String>,
+    },
     /// List the bundled sample parts.
     Samples,
 }
@@ -202,7 +222,18 @@ fn run(command: Command) -> Result<(), CliError> {
             out,
             setup,
             json,
-        } => plan(part, out, &setup, json),
+            gcode,
+            post,
+            tool_table,
+        } => plan(
+            part,
+            out,
+            &setup,
+            json,
+            gcode
+                .as_deref()
+                .map(|g| (g, post.as_str(), tool_table.as_deref())),
+        ),
         Command::Recognize {
             part,
             setup,
@@ -303,6 +334,20 @@ fn run(command: Command) -> Result<(), CliError> {
             kind: "post",
             message,
         }),
+        Command::Gui { part } => gui(part),
+        Command::Simulate(args) => match simulate_cmd::run(&args) {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(CliError {
+                code: exit::NOT_CLEAN,
+                kind: "simulate",
+                message: String::new(),
+            }),
+            Err(message) => Err(CliError {
+                code: exit::BAD_INPUT,
+                kind: "input",
+                message,
+            }),
+        },
         Command::Samples => {
             for (name, _) in thinplan_import::SAMPLES {
                 println!("builtin:{name}");
@@ -490,6 +535,7 @@ fn plan(
     out: Option<PathBuf>,
     setup_opts: &SetupOpts,
     json: bool,
+    gcode: Option<(&Path, &str, Option<&Path>)>,
 ) -> Result<(), CliError> {
     let source = part.unwrap_or_else(|| format!("builtin:{}", thinplan_import::DEFAULT_SAMPLE));
     let knowledge = load_knowledge(setup_opts.knowledge.as_deref())?;
@@ -515,7 +561,7 @@ fn plan(
         plan,
         warnings,
         brep,
-        ..
+        knowledge,
     } = session;
 
     let out = out.unwrap_or_else(|| default_out(&source));
@@ -532,6 +578,15 @@ fn plan(
         message: error_chain(&e),
     })?;
     let plan_file = out.display().to_string();
+    if let Some((path, post, table)) = gcode {
+        post_cmd::write_program(&plan, &knowledge, post, path, table).map_err(|message| {
+            CliError {
+                code: exit::OUTPUT,
+                kind: "output",
+                message,
+            }
+        })?;
+    }
     if json {
         let v = thinplan_pipeline::report::plan_json(&plan, &brep, &plan_file, &warnings);
         println!("{v}");
@@ -571,6 +626,44 @@ fn plan(
         println!("plan written to {plan_file}");
     }
     Ok(())
+}
+
+/// Runs the GUI binary that is built beside this one; the CLI stays free of
+/// the GUI's dependencies.
+fn gui(part: Option<String>) -> Result<(), CliError> {
+    let exe = std::env::current_exe().map_err(|e| CliError {
+        code: exit::INTERNAL,
+        kind: "gui",
+        message: format!("cannot find this program's path: {e}"),
+    })?;
+    let gui = exe.with_file_name(format!("thinplan-gui{}", std::env::consts::EXE_SUFFIX));
+    if !gui.is_file() {
+        return Err(CliError {
+            code: exit::INTERNAL,
+            kind: "gui",
+            message: format!(
+                "{} is not built: run `cargo build --release -p thinplan-gui` (or `cargo run -p thinplan-gui`)",
+                gui.display()
+            ),
+        });
+    }
+    let status = std::process::Command::new(&gui)
+        .args(part)
+        .status()
+        .map_err(|e| CliError {
+            code: exit::INTERNAL,
+            kind: "gui",
+            message: format!("{}: {e}", gui.display()),
+        })?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(CliError {
+            code: exit::INTERNAL,
+            kind: "gui",
+            message: format!("{} exited with {status}", gui.display()),
+        })
+    }
 }
 
 fn default_out(source: &str) -> PathBuf {

@@ -146,7 +146,15 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         refusals: Vec::new(),
     };
     for f in &plan.machining_features {
-        match layers::feature_operations(f, &env) {
+        // A geometry library panicking on an awkward profile (cavalier_contours
+        // asserts on some degenerate offsets) refuses this feature, not the plan.
+        let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            layers::feature_operations(f, &env)
+        }))
+        .unwrap_or_else(|_| {
+            Err("the offset geometry failed on this profile (library panic)".into())
+        });
+        match made {
             Ok(made) => {
                 out.warnings.extend(made.warnings);
                 for lo in made.ops {

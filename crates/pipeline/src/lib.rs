@@ -221,11 +221,13 @@ pub fn check_fits(
 }
 
 /// The stages a session runs after import and set-up, in order.
-pub const PLANNING_STAGES: [Stage; 4] = [
+pub const PLANNING_STAGES: [Stage; 6] = [
     Stage::Recognise,
     Stage::Sequence,
     Stage::Determine,
     Stage::Resolve,
+    Stage::Operations,
+    Stage::Order,
 ];
 
 /// A part being planned: its geometry, the knowledge and the plan so far.
@@ -336,7 +338,22 @@ impl Session {
                 r.apply_to(&mut self.plan);
                 Ok(())
             }
-            Stage::Operations | Stage::Order | Stage::Output => Err(PipelineError::new(
+            Stage::Operations => {
+                needs(Stage::Resolve)?;
+                let ops = thinplan_operations::operations(&self.plan, &self.knowledge)
+                    .map_err(|e| PipelineError::new(ErrorKind::Stage, e.to_string()))?;
+                self.warnings.extend(ops.warnings.iter().cloned());
+                ops.apply_to(&mut self.plan);
+                Ok(())
+            }
+            Stage::Order => {
+                needs(Stage::Operations)?;
+                let order = thinplan_operations::order(&self.plan)
+                    .map_err(|e| PipelineError::new(ErrorKind::Stage, e.to_string()))?;
+                thinplan_operations::order::apply_order(&mut self.plan, order);
+                Ok(())
+            }
+            Stage::Output => Err(PipelineError::new(
                 ErrorKind::Stage,
                 format!("{stage:?} is not built yet"),
             )),
@@ -369,7 +386,7 @@ impl Session {
 }
 
 /// The last stage this build can run.
-pub const LAST_BUILT: Stage = Stage::Resolve;
+pub const LAST_BUILT: Stage = Stage::Order;
 
 /// An error with its sources, on one line.
 pub fn error_chain(e: &dyn std::error::Error) -> String {

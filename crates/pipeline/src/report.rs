@@ -124,7 +124,20 @@ pub fn plan_json(plan: &Plan, brep: &Brep, plan_file: &str, warnings: &[String])
         "machining_features": plan.machining_features.iter().map(machining_feature_json).collect::<Vec<_>>(),
         "constraints": plan.machining_constraints.iter().map(|c| constraints(c.first.to_string(), c.second.to_string(), c.kind, &c.provenance.rule)).collect::<Vec<_>>(),
         "refused": refused,
-        "operations": plan.operations.len(),
+        "operations": plan.operations.iter().map(|op| {
+            let o = thinplan_operations::summary(op);
+            json!({
+                "id": o.id.to_string(),
+                "feature": o.feature.to_string(),
+                "tool": o.tool,
+                "pattern": o.pattern,
+                "layers": o.layers,
+                "length_mm": r6(o.length_mm),
+                "time_s": r6(o.time_s),
+                "rule": op.provenance.rule,
+            })
+        }).collect::<Vec<_>>(),
+        "operation_order": plan.operation_order.iter().map(|id| id.to_string()).collect::<Vec<_>>(),
         "warnings": warnings,
     })
 }

@@ -20,7 +20,9 @@ fn runs_stages_in_order_with_progress() {
             Stage::Recognise,
             Stage::Sequence,
             Stage::Determine,
-            Stage::Resolve
+            Stage::Resolve,
+            Stage::Operations,
+            Stage::Order
         ]
     );
     assert!(s.plan.stages_done.contains(&Stage::Determine));
