@@ -200,6 +200,7 @@ fn main() -> ExitCode {
             | Command::CheckKnowledge { json: true, .. }
             | Command::SizeWall { json: true, .. }
             | Command::Pocket { json: true, .. }
+            | Command::Simulate(simulate_cmd::SimulateArgs { json: true, .. })
             | Command::Bench {
                 what: BenchWhat::Pockets { json: true }
             }
