@@ -1,0 +1,855 @@
+//! The eframe application: panels around the 3D viewport and the network
+//! view, all reading one [`AppState`]; a click anywhere changes the one
+//! selection every view shows.
+
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+
+use eframe::egui::{self, Color32, RichText};
+use thinplan_pipeline::SetupRequest;
+use thinplan_plan::{ConstraintKind, Plan, Stage, StiffnessFeatureId, WallRole};
+
+use crate::network::NetworkView;
+use crate::relations;
+use crate::state::{kind_word, AppState, Entity};
+use crate::viewport::Viewport;
+
+const ROW_H: f32 = 18.0;
+
+/// The text fields and choices of the panels (not part of the plan).
+#[derive(Default)]
+struct Forms {
+    part_source: String,
+    knowledge_dir: String,
+    plan_path: String,
+    up: String,
+    machine: String,
+    tool_set: String,
+    material: String,
+    thickness: f64,
+    z_min: f64,
+    z_max: f64,
+    spindle: f64,
+    /// For which selection the numbers above were filled in.
+    filled_for: Option<(Entity, u64)>,
+    other: Option<StiffnessFeatureId>,
+    kind: Option<ConstraintKind>,
+}
+
+pub struct ThinplanApp {
+    pub state: AppState,
+    pub viewport: Viewport,
+    pub network: NetworkView,
+    forms: Forms,
+    /// Tree nodes the user opened.
+    expanded: BTreeSet<Entity>,
+    /// The selection the tree last scrolled to.
+    tree_scrolled_to: Option<Entity>,
+    /// Simulation on/off and position (kept when the plan changes if it fits).
+    pub simulate: bool,
+    pub sim_index: usize,
+}
+
+impl ThinplanApp {
+    /// The application opening `source` (a part file or `builtin:NAME`).
+    pub fn new(cc: &eframe::CreationContext<'_>, source: &str) -> Self {
+        let gpu = match &cc.wgpu_render_state {
+            Some(rs) => {
+                crate::render::install(rs);
+                true
+            }
+            None => false,
+        };
+        Self::with_state(AppState::open_default(source), gpu)
+    }
+
+    /// The application on a prepared state (benchmarks, tests).
+    pub fn from_state(cc: &eframe::CreationContext<'_>, state: AppState) -> Self {
+        let gpu = match &cc.wgpu_render_state {
+            Some(rs) => {
+                crate::render::install(rs);
+                true
+            }
+            None => false,
+        };
+        Self::with_state(state, gpu)
+    }
+
+    pub fn with_state(state: AppState, gpu: bool) -> Self {
+        let mut app = ThinplanApp {
+            state,
+            viewport: Viewport::new(gpu),
+            network: NetworkView::default(),
+            forms: Forms::default(),
+            expanded: BTreeSet::from([Entity::Part, Entity::Setup]),
+            tree_scrolled_to: None,
+            simulate: false,
+            sim_index: 0,
+        };
+        app.fill_forms_from_plan();
+        app
+    }
+
+    fn fill_forms_from_plan(&mut self) {
+        if let Some(p) = self.state.plan() {
+            self.forms.part_source = p.part.source.clone();
+            self.forms.up = format!("{}, {}, {}", p.setup.up.x, p.setup.up.y, p.setup.up.z);
+            self.forms.machine = p.setup.machine.clone();
+            self.forms.tool_set = p.setup.tool_set.clone();
+            self.forms.material = p.setup.material.clone();
+        }
+    }
+
+    /// Everything but drawing: job polling and keyboard shortcuts.
+    fn tick(&mut self, ctx: &egui::Context) {
+        if self.state.poll_job() {
+            self.fill_forms_from_plan();
+        }
+        if self.state.is_running() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(50));
+        }
+        let (undo, redo) = ctx.input_mut(|i| {
+            let redo = i.consume_key(
+                egui::Modifiers::COMMAND | egui::Modifiers::SHIFT,
+                egui::Key::Z,
+            ) || i.consume_key(egui::Modifiers::COMMAND, egui::Key::Y);
+            let undo = i.consume_key(egui::Modifiers::COMMAND, egui::Key::Z);
+            (undo, redo)
+        });
+        if undo {
+            self.state.undo();
+        }
+        if redo {
+            self.state.redo();
+        }
+        // The simulation follows the slider.
+        let n = self.state.plan().map_or(0, |p| p.machining_features.len());
+        let step = (self.simulate && n > 0).then(|| self.sim_index.min(n - 1));
+        self.state.set_sim_step(step);
+    }
+
+    fn top_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal_wrapped(|ui| {
+            ui.label("Part:");
+            ui.add(egui::TextEdit::singleline(&mut self.forms.part_source).desired_width(220.0));
+            egui::ComboBox::from_id_salt("samples")
+                .selected_text("samples")
+                .show_ui(ui, |ui| {
+                    for (name, _) in thinplan_import::SAMPLES {
+                        if ui.selectable_label(false, *name).clicked() {
+                            self.forms.part_source = format!("builtin:{name}");
+                        }
+                    }
+                });
+            if ui.button("Open part").clicked() {
+                let src = self.forms.part_source.trim().to_string();
+                if self.state.open_part(&src, &self.setup_request()) {
+                    self.viewport.camera = Default::default();
+                }
+            }
+            ui.separator();
+            let running = self.state.is_running();
+            ui.add_enabled_ui(!running, |ui| {
+                let next = self.state.session().and_then(|s| s.next_stage());
+                let label = match next {
+                    Some(s) => format!("Run next stage ({s:?})"),
+                    None => "Run next stage".into(),
+                };
+                if ui.button(label).clicked() {
+                    self.state.run_next();
+                }
+                if ui.button("Run all").clicked() {
+                    self.state.run_all();
+                }
+            });
+            if let Some((label, stage)) = self.state.job_progress() {
+                ui.spinner();
+                ui.label(match stage {
+                    Some(s) => format!("{label}: {s:?}…"),
+                    None => format!("{label}…"),
+                });
+                if ui.button("Cancel").clicked() {
+                    self.state.cancel();
+                }
+            }
+            ui.separator();
+            ui.add_enabled_ui(!running, |ui| {
+                let u = self.state.history.undo_label().map(str::to_string);
+                let r = self.state.history.redo_label().map(str::to_string);
+                if ui
+                    .add_enabled(u.is_some(), egui::Button::new("Undo"))
+                    .on_hover_text(u.unwrap_or_default())
+                    .clicked()
+                {
+                    self.state.undo();
+                }
+                if ui
+                    .add_enabled(r.is_some(), egui::Button::new("Redo"))
+                    .on_hover_text(r.unwrap_or_default())
+                    .clicked()
+                {
+                    self.state.redo();
+                }
+            });
+            ui.separator();
+            ui.label("Plan file:");
+            ui.add(egui::TextEdit::singleline(&mut self.forms.plan_path).desired_width(160.0));
+            if ui.button("Save plan").clicked() {
+                let p = PathBuf::from(self.forms.plan_path.trim());
+                self.state.save_plan(&p);
+            }
+            if ui.button("Open plan").clicked() {
+                let p = PathBuf::from(self.forms.plan_path.trim());
+                if self.state.open_plan(&p) {
+                    self.fill_forms_from_plan();
+                }
+            }
+        });
+        if let Some(p) = self.state.plan() {
+            ui.horizontal(|ui| {
+                ui.label("Stages done:");
+                for s in Stage::ALL {
+                    let done = p.stages_done.contains(&s);
+                    let text = RichText::new(format!("{s:?}"));
+                    ui.label(if done {
+                        text.color(Color32::from_rgb(110, 200, 110))
+                    } else {
+                        text.weak()
+                    });
+                }
+            });
+        }
+    }
+
+    fn setup_request(&self) -> SetupRequest {
+        SetupRequest {
+            setup_file: None,
+            up: crate::state::parse_up(&self.forms.up).ok(),
+            machine: Some(self.forms.machine.clone()).filter(|s| !s.is_empty()),
+            tool_set: Some(self.forms.tool_set.clone()).filter(|s| !s.is_empty()),
+            material: Some(self.forms.material.clone()).filter(|s| !s.is_empty()),
+        }
+    }
+
+    fn setup_and_knowledge(&mut self, ui: &mut egui::Ui) {
+        egui::CollapsingHeader::new("Set-up")
+            .default_open(false)
+            .show(ui, |ui| {
+                let Some(k) = self.state.knowledge() else {
+                    ui.label("no part open");
+                    return;
+                };
+                let (machines, tools, materials): (Vec<String>, Vec<String>, Vec<String>) = (
+                    k.machines.keys().cloned().collect(),
+                    k.tool_sets.keys().cloned().collect(),
+                    k.materials.keys().cloned().collect(),
+                );
+                egui::Grid::new("setup").num_columns(2).show(ui, |ui| {
+                    ui.label("up (x, y, z)");
+                    ui.text_edit_singleline(&mut self.forms.up);
+                    ui.end_row();
+                    for (label, list, value) in [
+                        ("machine", &machines, &mut self.forms.machine),
+                        ("tools", &tools, &mut self.forms.tool_set),
+                        ("material", &materials, &mut self.forms.material),
+                    ] {
+                        ui.label(label);
+                        egui::ComboBox::from_id_salt(label)
+                            .selected_text(value.as_str())
+                            .show_ui(ui, |ui| {
+                                for m in list {
+                                    ui.selectable_value(value, m.clone(), m);
+                                }
+                            });
+                        ui.end_row();
+                    }
+                });
+                if let Err(e) = crate::state::parse_up(&self.forms.up) {
+                    ui.colored_label(Color32::LIGHT_RED, e);
+                } else if ui.button("Apply set-up").clicked() {
+                    let req = self.setup_request();
+                    self.state.apply_setup(&req);
+                }
+            });
+        egui::CollapsingHeader::new("Knowledge")
+            .default_open(!self.state.knowledge_status.errors.is_empty())
+            .show(ui, |ui| {
+                let origin = self
+                    .state
+                    .knowledge()
+                    .map(|k| k.origin.clone())
+                    .unwrap_or_default();
+                ui.label(format!("in use: {origin}"));
+                ui.horizontal(|ui| {
+                    ui.label("directory:");
+                    ui.text_edit_singleline(&mut self.forms.knowledge_dir);
+                });
+                ui.horizontal(|ui| {
+                    if ui.button("Load / reload").clicked() {
+                        let d = PathBuf::from(self.forms.knowledge_dir.trim());
+                        self.state.load_knowledge(Some(&d));
+                    }
+                    if ui.button("Built-in").clicked() {
+                        self.state.load_knowledge(None);
+                    }
+                });
+                for e in &self.state.knowledge_status.errors {
+                    ui.colored_label(Color32::LIGHT_RED, e);
+                }
+            });
+    }
+
+    fn tree(&mut self, ui: &mut egui::Ui) {
+        let ThinplanApp {
+            state,
+            expanded,
+            tree_scrolled_to,
+            ..
+        } = self;
+        let Some(plan) = state.plan() else {
+            ui.label("no part open");
+            return;
+        };
+        let rows = tree_rows(plan, expanded, state.selection);
+        let mut area = egui::ScrollArea::vertical().auto_shrink(false);
+        if state.selection != *tree_scrolled_to {
+            if let Some(i) = rows.iter().position(|r| Some(r.1) == state.selection) {
+                let y = i as f32 * (ROW_H + ui.spacing().item_spacing.y) - 100.0;
+                area = area.vertical_scroll_offset(y.max(0.0));
+            }
+            *tree_scrolled_to = state.selection;
+        }
+        let mut select = None;
+        let mut toggle = None;
+        area.show_rows(ui, ROW_H, rows.len(), |ui, range| {
+            for &(depth, e, children) in &rows[range] {
+                ui.horizontal(|ui| {
+                    ui.add_space(depth as f32 * 14.0);
+                    if children {
+                        let open = expanded.contains(&e);
+                        if ui.small_button(if open { "-" } else { "+" }).clicked() {
+                            toggle = Some(e);
+                        }
+                    } else {
+                        ui.add_space(18.0);
+                    }
+                    let mut text = RichText::new(relations::name(plan, e));
+                    if state.changed.contains(&e) {
+                        text = text.color(Color32::from_rgb(110, 220, 110));
+                    }
+                    if state.highlighted.contains(&e) {
+                        text = text.color(Color32::from_rgb(90, 210, 255));
+                    }
+                    if ui
+                        .selectable_label(state.selection == Some(e), text)
+                        .clicked()
+                    {
+                        select = Some(e);
+                    }
+                });
+            }
+        });
+        if let Some(e) = toggle {
+            if !expanded.remove(&e) {
+                expanded.insert(e);
+            }
+        }
+        if let Some(e) = select {
+            state.select(Some(e));
+            *tree_scrolled_to = Some(e);
+        }
+    }
+
+    fn refill_edit_forms(&mut self) {
+        let Some(sel) = self.state.selection else {
+            return;
+        };
+        let key = (sel, self.state.plan_generation);
+        if self.forms.filled_for == Some(key) {
+            return;
+        }
+        let Some(plan) = self.state.plan() else {
+            return;
+        };
+        match sel {
+            Entity::Stiffness(id) => {
+                if let Some(f) = relations::sf(plan, id) {
+                    self.forms.thickness = f.thickness.unwrap_or(0.0);
+                }
+            }
+            Entity::Machining(id) => {
+                if let Some(f) = relations::mf(plan, id) {
+                    self.forms.z_min = f.shape.z_min;
+                    self.forms.z_max = f.shape.z_max;
+                }
+            }
+            Entity::Operation(id) => {
+                if let Some(o) = plan.operations.iter().find(|o| o.id == id) {
+                    self.forms.spindle = o.spindle_rpm;
+                }
+            }
+            _ => {}
+        }
+        self.forms.filled_for = Some(key);
+    }
+
+    fn inspector(&mut self, ui: &mut egui::Ui) {
+        let Some(sel) = self.state.selection else {
+            ui.label("Select something in the tree, the 3D view or the network.");
+            return;
+        };
+        self.refill_edit_forms();
+        let mut acts = Vec::new();
+        let ThinplanApp { state, forms, .. } = self;
+        let Some(plan) = state.plan() else { return };
+        let plan: &Plan = plan;
+        ui.heading(format!("Inspector: {}", relations::name(plan, sel)));
+        egui::Grid::new("attributes")
+            .num_columns(2)
+            .striped(true)
+            .show(ui, |ui| {
+                let mut row = |k: &str, v: String| {
+                    ui.label(k);
+                    ui.label(v);
+                    ui.end_row();
+                };
+                match sel {
+                    Entity::Part => {
+                        row("source", plan.part.source.clone());
+                        row("format", format!("{:?}", plan.part.format));
+                        row("faces", plan.part.summary.faces.to_string());
+                        let b = plan.part.summary.bbox;
+                        row(
+                            "size mm",
+                            format!("{:.1} × {:.1} × {:.1}", b[0], b[1], b[2]),
+                        );
+                        row("volume mm³", format!("{:.0}", plan.part.summary.volume));
+                        row(
+                            "sha256",
+                            plan.part.sha256.chars().take(16).collect::<String>() + "…",
+                        );
+                    }
+                    Entity::Setup => {
+                        let s = &plan.setup;
+                        row("up", format!("{:.3}, {:.3}, {:.3}", s.up.x, s.up.y, s.up.z));
+                        row("machine", s.machine.clone());
+                        row("tools", s.tool_set.clone());
+                        row("material", s.material.clone());
+                    }
+                    Entity::Stiffness(id) => {
+                        if let Some(f) = relations::sf(plan, id) {
+                            row("kind", relations::kind_name(f.kind).into());
+                            row("role", f.role.map_or("—".into(), |r| format!("{r:?}")));
+                            row(
+                                "thickness mm",
+                                f.thickness.map_or("—".into(), |t| format!("{t:.3}")),
+                            );
+                            row("height mm", format!("{:.3}", f.height));
+                            row("length mm", format!("{:.3}", f.length));
+                            row("faces", format!("{:?}", f.faces));
+                            row(
+                                "axis",
+                                format!("{:.3}, {:.3}, {:.3}", f.axis.x, f.axis.y, f.axis.z),
+                            );
+                        }
+                    }
+                    Entity::Machining(id) => {
+                        if let Some(f) = relations::mf(plan, id) {
+                            row("owner", f.owner.to_string());
+                            row(
+                                "z range mm",
+                                format!("{:.3} – {:.3}", f.shape.z_min, f.shape.z_max),
+                            );
+                            row(
+                                "profile vertices",
+                                f.shape.region.outer.vertices.len().to_string(),
+                            );
+                            row("bottom", format!("{:?}", f.bottom_adjacency));
+                        }
+                    }
+                    Entity::Operation(id) => {
+                        if let Some(o) = plan.operations.iter().find(|o| o.id == id) {
+                            row("feature", o.feature.to_string());
+                            row("method", o.method.clone());
+                            row("tool", o.tool.clone());
+                            row("spindle rpm", format!("{:.0}", o.spindle_rpm));
+                            row("moves", o.moves.len().to_string());
+                        }
+                    }
+                }
+            });
+        ui.separator();
+        // Commands on the selection.
+        ui.horizontal_wrapped(|ui| {
+            let mut hl = None;
+            if ui.button("predecessors").clicked() {
+                hl = Some(relations::neighbours(plan, sel, false, false));
+            }
+            if ui.button("all predecessors").clicked() {
+                hl = Some(relations::neighbours(plan, sel, false, true));
+            }
+            if ui.button("successors").clicked() {
+                hl = Some(relations::neighbours(plan, sel, true, false));
+            }
+            if ui.button("all successors").clicked() {
+                hl = Some(relations::neighbours(plan, sel, true, true));
+            }
+            if ui.button("together").clicked() {
+                hl = Some(relations::together(plan, sel));
+            }
+            if ui.button("owned").clicked() {
+                hl = Some(relations::owned(plan, sel));
+            }
+            if let Some(o) = relations::owner(plan, sel) {
+                if ui.button("owner").clicked() {
+                    acts.push(Act::Select(Some(o)));
+                }
+            }
+            if let Some(h) = hl {
+                acts.push(Act::Highlight(h));
+            }
+        });
+        if !state.highlighted.is_empty() {
+            ui.horizontal_wrapped(|ui| {
+                for e in &state.highlighted {
+                    if ui.link(e.to_string()).clicked() {
+                        acts.push(Act::Select(Some(*e)));
+                    }
+                }
+            });
+        }
+        egui::CollapsingHeader::new("why? (provenance)")
+            .default_open(true)
+            .show(ui, |ui| match relations::provenance(plan, sel) {
+                Some(p) => {
+                    ui.label(format!("{:?}: {}", p.source, p.rule));
+                    for (k, v) in &p.values {
+                        ui.label(format!("  {k} = {v}"));
+                    }
+                    if !p.note.is_empty() {
+                        ui.label(&p.note);
+                    }
+                }
+                None => {
+                    ui.label(format!("imported from {}", plan.part.source));
+                }
+            });
+        ui.separator();
+        editor(ui, forms, plan, sel, &mut acts);
+        if let Some(r) = &state.refusal {
+            ui.colored_label(Color32::from_rgb(255, 110, 90), r);
+        }
+        for a in acts {
+            self.apply(a);
+        }
+    }
+
+    fn apply(&mut self, a: Act) {
+        let s = &mut self.state;
+        match a {
+            Act::Select(e) => s.select(e),
+            Act::Highlight(h) => {
+                s.message = format!("{} highlighted", h.len());
+                s.highlight(h);
+            }
+            Act::Thickness(id, t) => {
+                s.set_thickness(id, t);
+            }
+            Act::Role(id, r) => {
+                s.set_role(id, r);
+            }
+            Act::AddConstraint(a, b, k) => {
+                s.add_constraint(a, b, k);
+            }
+            Act::RemoveConstraint(i) => {
+                s.remove_constraint(i);
+            }
+            Act::Resize(id, lo, hi) => {
+                s.resize_machining(id, lo, hi);
+            }
+            Act::Spindle(id, rpm) => {
+                s.set_spindle(id, rpm);
+            }
+        }
+    }
+
+    fn simulation(&mut self, ui: &mut egui::Ui) {
+        let Some(plan) = self.state.plan() else {
+            return;
+        };
+        let n = plan.machining_features.len();
+        ui.horizontal(|ui| {
+            ui.add_enabled(
+                n > 0,
+                egui::Checkbox::new(&mut self.simulate, "Sequence simulation"),
+            );
+            if n == 0 {
+                ui.label("(no machining features yet: run the stages)");
+                return;
+            }
+            ui.add_enabled(
+                self.simulate,
+                egui::Slider::new(&mut self.sim_index, 0..=n - 1).text("step"),
+            );
+        });
+        if let (true, Some(k), Some(knowledge)) =
+            (self.simulate, self.state.sim_step, self.state.knowledge())
+        {
+            let order = relations::machining_order(plan);
+            if let Some(id) = order.get(k) {
+                let cur = relations::name(plan, Entity::Machining(*id));
+                let mut line = format!(
+                    "{}/{}: cutting {cur}; {k} removed, {} remaining",
+                    k + 1,
+                    n,
+                    n - k - 1
+                );
+                let mut bad = false;
+                if let Some(r) = relations::deflection_at(plan, knowledge, &order, k) {
+                    bad = r.too_large();
+                    line.push_str(&format!(
+                        "; wall {} deflection {:.5} mm (allowed {:.4}, {:?}{})",
+                        r.wall,
+                        r.deflection,
+                        r.allowed,
+                        r.mode,
+                        r.planned
+                            .map_or(String::new(), |p| format!(", sized for {p:.5}"))
+                    ));
+                    if bad {
+                        line.push_str(" — TOO LARGE");
+                    }
+                }
+                ui.colored_label(
+                    if bad {
+                        Color32::from_rgb(255, 110, 90)
+                    } else {
+                        ui.visuals().text_color()
+                    },
+                    line,
+                );
+            }
+        }
+    }
+
+    /// One frame of the whole interface.
+    pub fn frame(&mut self, ui: &mut egui::Ui) {
+        self.tick(ui.ctx());
+        egui::Panel::top("top").show(ui, |ui| self.top_bar(ui));
+        egui::Panel::bottom("bottom").show(ui, |ui| {
+            self.simulation(ui);
+            let msg = self.state.message.lines().next().unwrap_or("").to_string();
+            ui.label(RichText::new(msg).small());
+        });
+        egui::Panel::left("tree")
+            .default_size(260.0)
+            .show(ui, |ui| {
+                ui.label(RichText::new("Plan").strong());
+                self.tree(ui);
+            });
+        egui::Panel::right("inspector")
+            .default_size(330.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    self.setup_and_knowledge(ui);
+                    ui.separator();
+                    self.inspector(ui);
+                });
+            });
+        egui::CentralPanel::default().show(ui, |ui| {
+            let h = ui.available_height();
+            let w = ui.available_width();
+            ui.allocate_ui(egui::vec2(w, h * 0.6), |ui| {
+                self.viewport.ui(ui, &mut self.state);
+            });
+            ui.separator();
+            self.network.ui(ui, &mut self.state);
+        });
+    }
+}
+
+fn editor(ui: &mut egui::Ui, forms: &mut Forms, plan: &Plan, sel: Entity, acts: &mut Vec<Act>) {
+    match sel {
+        Entity::Stiffness(id) => {
+            ui.label(RichText::new("Edit").strong());
+            ui.horizontal(|ui| {
+                ui.label("thickness");
+                ui.add(
+                    egui::DragValue::new(&mut forms.thickness)
+                        .speed(0.01)
+                        .range(0.001..=1e4),
+                );
+                if ui.button("Set thickness").clicked() {
+                    acts.push(Act::Thickness(id, forms.thickness));
+                }
+            });
+            let role = relations::sf(plan, id).and_then(|f| f.role);
+            ui.horizontal(|ui| {
+                ui.label("role");
+                for r in [
+                    None,
+                    Some(WallRole::Web),
+                    Some(WallRole::Rib),
+                    Some(WallRole::Flange),
+                ] {
+                    let name = r.map_or("none".to_string(), |r| format!("{r:?}").to_lowercase());
+                    if ui.selectable_label(role == r, name).clicked() && role != r {
+                        acts.push(Act::Role(id, r));
+                    }
+                }
+            });
+            ui.label(RichText::new("Sequence constraints").strong());
+            let mut remove = None;
+            for (i, c) in plan.stiffness_constraints.iter().enumerate() {
+                if c.first == id || c.second == id {
+                    ui.horizontal(|ui| {
+                        ui.label(format!(
+                            "{} {} {}  ({})",
+                            c.first,
+                            kind_word(c.kind),
+                            c.second,
+                            c.provenance.rule
+                        ));
+                        if ui.small_button("remove").clicked() {
+                            remove = Some(i);
+                        }
+                    });
+                }
+            }
+            if let Some(i) = remove {
+                acts.push(Act::RemoveConstraint(i));
+            }
+            ui.horizontal(|ui| {
+                ui.label(format!("{id}"));
+                let kind = forms.kind.get_or_insert(ConstraintKind::Before);
+                ui.selectable_value(kind, ConstraintKind::Before, "before");
+                ui.selectable_value(kind, ConstraintKind::Simultaneous, "with");
+                let others: Vec<StiffnessFeatureId> = plan
+                    .stiffness_features
+                    .iter()
+                    .map(|f| f.id)
+                    .filter(|o| *o != id)
+                    .collect();
+                if forms.other.is_none_or(|o| !others.contains(&o)) {
+                    forms.other = others.first().copied();
+                }
+                egui::ComboBox::from_id_salt("other feature")
+                    .selected_text(forms.other.map_or(String::new(), |o| o.to_string()))
+                    .show_ui(ui, |ui| {
+                        for o in &others {
+                            ui.selectable_value(&mut forms.other, Some(*o), o.to_string());
+                        }
+                    });
+                if ui.button("Add constraint").clicked() {
+                    if let Some(o) = forms.other {
+                        let k = forms.kind.unwrap_or(ConstraintKind::Before);
+                        acts.push(Act::AddConstraint(id, o, k));
+                    }
+                }
+            });
+        }
+        Entity::Machining(id) => {
+            ui.label(RichText::new("Edit").strong());
+            ui.horizontal(|ui| {
+                ui.label("z from");
+                ui.add(egui::DragValue::new(&mut forms.z_min).speed(0.05));
+                ui.label("to");
+                ui.add(egui::DragValue::new(&mut forms.z_max).speed(0.05));
+                if ui.button("Resize").clicked() {
+                    acts.push(Act::Resize(id, forms.z_min, forms.z_max));
+                }
+            });
+        }
+        Entity::Operation(id) => {
+            ui.label(RichText::new("Edit").strong());
+            ui.horizontal(|ui| {
+                ui.label("spindle rpm");
+                ui.add(
+                    egui::DragValue::new(&mut forms.spindle)
+                        .speed(10.0)
+                        .range(1.0..=1e6),
+                );
+                if ui.button("Set spindle").clicked() {
+                    acts.push(Act::Spindle(id, forms.spindle));
+                }
+            });
+        }
+        _ => {}
+    }
+}
+
+/// What a panel asked for, applied after drawing (the plan is borrowed
+/// while drawing, never copied).
+enum Act {
+    Select(Option<Entity>),
+    Highlight(BTreeSet<Entity>),
+    Thickness(StiffnessFeatureId, f64),
+    Role(StiffnessFeatureId, Option<WallRole>),
+    AddConstraint(StiffnessFeatureId, StiffnessFeatureId, ConstraintKind),
+    RemoveConstraint(usize),
+    Resize(thinplan_plan::MachiningFeatureId, f64, f64),
+    Spindle(thinplan_plan::OperationId, f64),
+}
+
+/// The tree as a flat list of visible rows `(depth, entity, has children)`,
+/// drawn lazily (only the rows in view), so ten thousand features cost what
+/// a screenful does. The path to the selection is opened (coupling).
+fn tree_rows(
+    plan: &Plan,
+    expanded: &mut BTreeSet<Entity>,
+    selection: Option<Entity>,
+) -> Vec<(usize, Entity, bool)> {
+    if let Some(sel) = selection {
+        let mut up = relations::owner(plan, sel);
+        while let Some(o) = up {
+            expanded.insert(o);
+            up = relations::owner(plan, o);
+        }
+        if matches!(sel, Entity::Stiffness(_)) {
+            expanded.insert(Entity::Part);
+            expanded.insert(Entity::Setup);
+        }
+    }
+    let mut rows = vec![(0, Entity::Part, true)];
+    if !expanded.contains(&Entity::Part) {
+        return rows;
+    }
+    rows.push((1, Entity::Setup, !plan.stiffness_features.is_empty()));
+    if !expanded.contains(&Entity::Setup) {
+        return rows;
+    }
+    let open_sf: BTreeSet<StiffnessFeatureId> = expanded
+        .iter()
+        .filter_map(|e| match e {
+            Entity::Stiffness(id) => Some(*id),
+            _ => None,
+        })
+        .collect();
+    let has_mf: BTreeSet<StiffnessFeatureId> =
+        plan.machining_features.iter().map(|m| m.owner).collect();
+    let has_op: BTreeSet<thinplan_plan::MachiningFeatureId> =
+        plan.operations.iter().map(|o| o.feature).collect();
+    for f in &plan.stiffness_features {
+        let e = Entity::Stiffness(f.id);
+        rows.push((2, e, has_mf.contains(&f.id)));
+        if !open_sf.contains(&f.id) {
+            continue;
+        }
+        for m in plan.machining_features.iter().filter(|m| m.owner == f.id) {
+            let me = Entity::Machining(m.id);
+            rows.push((3, me, has_op.contains(&m.id)));
+            if expanded.contains(&me) {
+                for o in plan.operations.iter().filter(|o| o.feature == m.id) {
+                    rows.push((4, Entity::Operation(o.id), false));
+                }
+            }
+        }
+    }
+    rows
+}
+
+impl eframe::App for ThinplanApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.frame(ui);
+    }
+}
