@@ -36,7 +36,9 @@ use thinplan_plan::{
 use thinplan_sizing::{MillingMode, SizingError, StepSizes, Wall};
 
 mod geom;
+mod influence;
 pub use geom::{area2, clip, flatten, prism_points, span};
+use influence::{Effects, Placement, Sz};
 
 /// The prefix of the provenance rule of everything this stage makes.
 pub const RULE_PREFIX: &str = "strategies.";
@@ -152,12 +154,17 @@ fn run_strategy(
     };
     let mut side: Option<(f64, String)> = None;
     let mut chain = Vec::new();
+    // Influence blocks read so far, effectuated by the next wall steps.
+    let mut influences: Vec<&Block> = Vec::new();
     for block in &strategy.blocks {
         match block {
             Block::SideChoice(b) => side = Some(choose_side(ctx, sf, &g, b)),
+            Block::ConnectedWalls(_) | Block::Cutouts(_) | Block::LargeHoles(_) => {
+                influences.push(block)
+            }
             Block::WallSteps(b) => {
                 let side = side.clone().unwrap_or((1.0, "no side choice block".into()));
-                chain.extend(wall_steps(ctx, sf, &g, b, side, out));
+                chain.extend(wall_steps(ctx, sf, &g, b, side, &influences, out));
             }
             Block::WebFaceMill(b) => chain.extend(web::face_mill(ctx, sf, &g, b, out)),
         }
@@ -177,6 +184,8 @@ pub(crate) struct WallGeom {
     /// height(p) = hdir · p (2D, shape frame), measured along the in-plane
     /// projection of up; zero for a wall lying flat.
     hdir: DVec2,
+    /// The same direction in 3D (zero for a wall lying flat).
+    hup: DVec3,
     top: f64,
     foot: f64,
 }
@@ -196,11 +205,11 @@ impl WallGeom {
         }
         let fy = n.cross(fx);
         let w = up - n * n.dot(up);
-        let hdir = if w.length() > 1e-9 {
+        let (hdir, hup) = if w.length() > 1e-9 {
             let w = w.normalize();
-            DVec2::new(fx.dot(w), fy.dot(w))
+            (DVec2::new(fx.dot(w), fy.dot(w)), w)
         } else {
-            DVec2::ZERO
+            (DVec2::ZERO, DVec3::ZERO)
         };
         let outline = flatten(&shape.region.outer);
         if outline.len() < 3 {
@@ -219,6 +228,7 @@ impl WallGeom {
             t,
             outline,
             hdir,
+            hup,
             top,
             foot,
         })
@@ -367,6 +377,10 @@ struct Step {
     large: bool,
     lo: f64,
     hi: f64,
+    /// This band's sizes (the wall's, or an influence's zone).
+    sz: Sz,
+    /// Why the sizes differ from the wall's (empty when they do not).
+    why: String,
 }
 
 /// The step approach for one rib or flange (§4.1.1, figure 4.1).
@@ -376,6 +390,7 @@ fn wall_steps(
     g: &WallGeom,
     b: &WallSteps,
     (side_a, why): (f64, String),
+    influences: &[&Block],
     out: &mut Determination,
 ) -> Vec<MachiningFeatureId> {
     let rule = format!("{RULE_PREFIX}{}", b.id);
@@ -424,143 +439,289 @@ fn wall_steps(
                 return Vec::new();
             }
         };
-    let width = sizes.b_rf * b.width_in_b_rf;
-    let width_on = |s: f64| {
-        let w = if b.clip_to_blank {
-            width.min(g.room(ctx.blank, s))
-        } else {
-            width
-        };
-        (w >= b.min_side_width.max(EPS)).then_some(w)
+    let wall_sz = Sz {
+        b_rf: sizes.b_rf,
+        h: sizes.h,
+        big_h: sizes.big_h,
     };
-    let (wa, wb) = (width_on(side_a), width_on(-side_a));
-    for (s, w) in [(side_a, wa), (-side_a, wb)] {
-        if let Some(w) = w {
-            if w < width - EPS {
-                out.warnings.push(format!(
-                    "{}: features on the {} side cut back to {w:.2} mm by the blank (B_RF = {})",
-                    sf.id,
-                    if s > 0.0 { "+normal" } else { "−normal" },
-                    sizes.b_rf
-                ));
-            }
+    // Accept the connected features' influences, in the strategy's order.
+    let mut eff = Effects::default();
+    for inf in influences {
+        match inf {
+            Block::ConnectedWalls(c) => influence::connected_walls(ctx, sf, c, wall_sz, &mut eff),
+            Block::Cutouts(c) => influence::cutouts(ctx, sf, g, c, wall_sz, b.mode, &mut eff),
+            Block::LargeHoles(c) => influence::large_holes(ctx, sf, g, c, wall_sz, &mut eff),
+            _ => {}
         }
     }
-    // Bands from the top down, depth measured from the top.
-    let bands = |step: f64| -> Vec<(f64, f64)> {
-        let n = ((height / step) - 1e-9).ceil().max(1.0) as usize;
+    out.warnings.append(&mut eff.warnings);
+    let room_on = |s: f64| {
+        if b.clip_to_blank {
+            g.room(ctx.blank, s)
+        } else {
+            f64::INFINITY
+        }
+    };
+    let has = |s: f64| room_on(s) >= b.min_side_width.max(EPS);
+    let (ha, hb) = (has(side_a), has(-side_a));
+    for (s, h) in [(side_a, ha), (-side_a, hb)] {
+        let w = room_on(s);
+        if h && w < sizes.b_rf * b.width_in_b_rf - EPS {
+            out.warnings.push(format!(
+                "{}: features on the {} side cut back to {w:.2} mm by the blank (B_RF = {})",
+                sf.id,
+                if s > 0.0 { "+normal" } else { "−normal" },
+                sizes.b_rf
+            ));
+        }
+    }
+    if !ha && !hb {
+        out.warnings.push(format!(
+            "{}: no material beside the wall; nothing to step",
+            sf.id
+        ));
+        return Vec::new();
+    }
+    if ha != hb {
+        out.warnings.push(format!(
+            "{}: material on one side only; machined one-sided in steps of h = {}",
+            sf.id, sizes.h
+        ));
+    }
+    // Segments between the boundaries the influences ask for (the step
+    // separation line, a cut-out zone's bottom), each stepped from its top.
+    let mut cuts: Vec<f64> = eff
+        .breaks
+        .iter()
+        .map(|b| b.at)
+        .filter(|h| *h > g.foot + EPS && *h < g.top - EPS)
+        .collect();
+    cuts.extend([g.top, g.foot]);
+    cuts.sort_by(|a, b| b.total_cmp(a));
+    cuts.dedup_by(|a, b| (*a - *b).abs() < EPS);
+    let bands = |lo: f64, hi: f64, step: f64| -> Vec<(f64, f64)> {
+        let n = (((hi - lo) / step) - 1e-9).ceil().max(1.0) as usize;
         (0..n)
             .map(|i| {
-                let hi = g.top - step * i as f64;
-                let lo = (g.top - step * (i + 1) as f64).max(g.foot);
-                (lo, hi)
+                let top = hi - step * i as f64;
+                let bot = (hi - step * (i + 1) as f64).max(lo);
+                (bot, top)
             })
             .collect()
     };
     let mut steps: Vec<Step> = Vec::new();
-    match (wa, wb) {
-        (Some(_), Some(_)) => {
-            let small = bands(sizes.h);
+    for seg in cuts.windows(2) {
+        let (hi, lo) = (seg[0], seg[1]);
+        let mut sz = wall_sz;
+        let mut why = Vec::new();
+        for z in &eff.zones {
+            if lo >= z.lo - EPS && hi <= z.hi + EPS {
+                sz.h = sz.h.min(z.sizes.h);
+                sz.big_h = sz.big_h.min(z.sizes.big_h);
+                sz.b_rf = sz.b_rf.max(z.sizes.b_rf);
+                why.push(z.why.clone());
+            }
+        }
+        let why = why.join("; ");
+        let mk = |side: f64, large: bool, (lo, hi): (f64, f64)| Step {
+            side,
+            large,
+            lo,
+            hi,
+            sz,
+            why: why.clone(),
+        };
+        if ha && hb {
+            let small = bands(lo, hi, sz.h);
             let mut next_small = 0;
-            for (lo, hi) in bands(sizes.big_h) {
-                steps.push(Step {
-                    side: side_a,
-                    large: true,
-                    lo,
-                    hi,
-                });
+            for band in bands(lo, hi, sz.big_h) {
+                steps.push(mk(side_a, true, band));
                 // The small features this large one has exposed the far side of.
-                while next_small < small.len() && small[next_small].0 >= lo - EPS {
-                    let (l, h) = small[next_small];
-                    steps.push(Step {
-                        side: -side_a,
-                        large: false,
-                        lo: l,
-                        hi: h,
-                    });
+                while next_small < small.len() && small[next_small].0 >= band.0 - EPS {
+                    steps.push(mk(-side_a, false, small[next_small]));
                     next_small += 1;
                 }
             }
-        }
-        (Some(_), None) | (None, Some(_)) => {
-            let s = if wa.is_some() { side_a } else { -side_a };
-            out.warnings.push(format!(
-                "{}: material on one side only; machined one-sided in steps of h = {}",
-                sf.id, sizes.h
-            ));
-            for (lo, hi) in bands(sizes.h) {
-                steps.push(Step {
-                    side: s,
-                    large: false,
-                    lo,
-                    hi,
-                });
+        } else {
+            let s = if ha { side_a } else { -side_a };
+            for band in bands(lo, hi, sz.h) {
+                steps.push(mk(s, false, band));
             }
         }
-        (None, None) => {
-            out.warnings.push(format!(
-                "{}: no material beside the wall; nothing to step",
-                sf.id
-            ));
-            return Vec::new();
-        }
     }
-    let values = |p: Provenance| {
-        p.with_value("b_rf", sizes.b_rf)
-            .with_value("h", sizes.h)
-            .with_value("big_h", sizes.big_h)
-            .with_value("deflection", sizes.deflection)
-            .with_value("allowed_deflection", ctx.k.sizing.allowed_deflection)
-    };
+    // Where each inserted depression feature goes: after which step.
+    let after: Vec<usize> = eff
+        .inserts
+        .iter()
+        .map(|ins| {
+            let last = steps.len().saturating_sub(1);
+            let exposed = steps
+                .iter()
+                .position(|s| s.lo <= ins.lo + EPS)
+                .unwrap_or(last);
+            match ins.placement {
+                Placement::Exposed => exposed,
+                Placement::Last => steps
+                    .iter()
+                    .rposition(|s| s.lo < ins.hi - EPS && s.hi > ins.lo + EPS)
+                    .unwrap_or(exposed),
+            }
+        })
+        .collect();
+    let break_values: Vec<(&str, f64)> = eff
+        .breaks
+        .iter()
+        .flat_map(|b| b.values.iter().copied())
+        .collect();
     let (n_large, n_small) = (
         steps.iter().filter(|s| s.large).count(),
         steps.iter().filter(|s| !s.large).count(),
     );
     let mut chain = Vec::new();
+    // Inserted features waiting for the wall's next step.
+    let mut pending: Vec<(MachiningFeatureId, Provenance)> = Vec::new();
     let (mut i_large, mut i_small) = (0, 0);
-    for st in steps {
-        let w = if st.side == side_a { wa } else { wb }.expect("side has material");
-        let Some((shape, side_adjacency)) = g.prism(st.lo, st.hi, st.side, w) else {
-            continue;
+    for (i, st) in steps.iter().enumerate() {
+        let values = |mut p: Provenance| {
+            p = p
+                .with_value("b_rf", st.sz.b_rf)
+                .with_value("h", st.sz.h)
+                .with_value("big_h", st.sz.big_h)
+                .with_value("deflection", sizes.deflection)
+                .with_value("allowed_deflection", ctx.k.sizing.allowed_deflection);
+            for (k, v) in &break_values {
+                p = p.with_value(*k, *v);
+            }
+            p
         };
-        let id = MachiningFeatureId(out.features.len() as u32);
-        let (kind, num, of) = if st.large {
-            i_large += 1;
-            ("large", i_large, n_large)
-        } else {
-            i_small += 1;
-            ("small", i_small, n_small)
-        };
-        let mut prov = values(Provenance::new(ProvenanceSource::Knowledge, rule.clone()))
-            .with_value("side", st.side)
-            .with_value("large", if st.large { 1.0 } else { 0.0 })
-            .with_value("depth_from", g.top - st.hi)
-            .with_value("depth_to", g.top - st.lo)
-            .with_value("width", w)
-            .with_value("access_x", ctx.up.x)
-            .with_value("access_y", ctx.up.y)
-            .with_value("access_z", ctx.up.z);
-        prov.note = format!(
-            "{}: {kind} feature {num} of {of} on side {} ({}normal), depth {:.3}–{:.3} mm; \
-             side A by {why}",
-            sf.id,
-            if st.side == side_a { "A" } else { "B" },
-            if st.side > 0.0 { "+" } else { "−" },
-            g.top - st.hi,
-            g.top - st.lo
-        );
-        out.features.push(MachiningFeature {
-            id,
-            owner: sf.id,
-            shape,
-            side_adjacency,
-            hole_adjacency: Vec::new(),
-            bottom_adjacency: Adjacency::Product,
-            provenance: prov,
-        });
-        let mut p = values(Provenance::new(ProvenanceSource::Knowledge, rule.clone()));
-        p.note = format!("{}: figure 4.1 order, alternating sides top-down", sf.id);
-        extend_chain(out, &mut chain, id, p);
+        let mut w = (st.sz.b_rf * b.width_in_b_rf).min(room_on(st.side));
+        let mut capped = Vec::new();
+        for cap in &eff.width_caps {
+            if (!cap.local || st.lo <= g.foot + EPS) && cap.cap < w {
+                w = cap.cap;
+                capped.push(cap);
+            }
+        }
+        if let Some((shape, side_adjacency)) = g.prism(st.lo, st.hi, st.side, w) {
+            let id = MachiningFeatureId(out.features.len() as u32);
+            let (kind, num, of) = if st.large {
+                i_large += 1;
+                ("large", i_large, n_large)
+            } else {
+                i_small += 1;
+                ("small", i_small, n_small)
+            };
+            let mut prov = values(Provenance::new(ProvenanceSource::Knowledge, rule.clone()))
+                .with_value("side", st.side)
+                .with_value("large", if st.large { 1.0 } else { 0.0 })
+                .with_value("depth_from", g.top - st.hi)
+                .with_value("depth_to", g.top - st.lo)
+                .with_value("width", w)
+                .with_value("access_x", ctx.up.x)
+                .with_value("access_y", ctx.up.y)
+                .with_value("access_z", ctx.up.z);
+            // The web's permissible height, binding or not, for explanations.
+            for cap in &eff.width_caps {
+                for (k, v) in &cap.values {
+                    prov = prov.with_value(*k, *v);
+                }
+            }
+            prov.note = format!(
+                "{}: {kind} feature {num} of {of} on side {} ({}normal), depth {:.3}–{:.3} mm; \
+                 side A by {why}",
+                sf.id,
+                if st.side == side_a { "A" } else { "B" },
+                if st.side > 0.0 { "+" } else { "−" },
+                g.top - st.hi,
+                g.top - st.lo
+            );
+            if !st.why.is_empty() {
+                prov.note.push_str(&format!("; sizes: {}", st.why));
+            }
+            for cap in &capped {
+                prov.note
+                    .push_str(&format!("; {} ({})", cap.note, cap.rule));
+            }
+            out.features.push(MachiningFeature {
+                id,
+                owner: sf.id,
+                shape,
+                side_adjacency,
+                hole_adjacency: Vec::new(),
+                bottom_adjacency: Adjacency::Product,
+                provenance: prov,
+            });
+            for (p, mut cp) in pending.drain(..) {
+                cp.note = format!("{cp_note} before the wall's next step", cp_note = cp.note);
+                out.constraints.push(Constraint {
+                    first: p,
+                    second: id,
+                    kind: ConstraintKind::Before,
+                    priority: 0,
+                    provenance: cp,
+                });
+            }
+            let mut p = values(Provenance::new(ProvenanceSource::Knowledge, rule.clone()));
+            p.note = format!("{}: figure 4.1 order, alternating sides top-down", sf.id);
+            extend_chain(out, &mut chain, id, p);
+        }
+        // The depression features this step makes due.
+        for (ins, _) in eff.inserts.iter().zip(&after).filter(|(_, a)| **a == i) {
+            let Some((shape, side_adjacency)) = influence::piece(g, &ins.shape, ins.lo, ins.hi)
+            else {
+                out.warnings.push(format!(
+                    "{}: its piece at depth {:.2}–{:.2} mm of {} is empty; not made",
+                    ins.owner,
+                    g.top - ins.hi,
+                    g.top - ins.lo,
+                    sf.id
+                ));
+                continue;
+            };
+            let id = MachiningFeatureId(out.features.len() as u32);
+            let mut prov = Provenance::new(ProvenanceSource::Knowledge, ins.rule.clone());
+            for (k, v) in &ins.values {
+                prov = prov.with_value(*k, *v);
+            }
+            prov = prov
+                .with_value("wall", f64::from(sf.id.0))
+                .with_value("depth_from", g.top - ins.hi)
+                .with_value("depth_to", g.top - ins.lo)
+                .with_value("access_x", ctx.up.x)
+                .with_value("access_y", ctx.up.y)
+                .with_value("access_z", ctx.up.z);
+            let mut cp = prov.clone();
+            prov.note = ins.note.clone();
+            out.features.push(MachiningFeature {
+                id,
+                owner: ins.owner,
+                shape,
+                side_adjacency,
+                hole_adjacency: Vec::new(),
+                bottom_adjacency: Adjacency::Open,
+                provenance: prov,
+            });
+            cp.note = format!(
+                "{}: {} piece of {}, {}",
+                ins.owner,
+                match ins.placement {
+                    Placement::Exposed => "as soon as exposed",
+                    Placement::Last => "after the wall beside it",
+                },
+                sf.id,
+                "inserted in the wall's steps"
+            );
+            if let Some(&prev) = chain.last() {
+                out.constraints.push(Constraint {
+                    first: prev,
+                    second: id,
+                    kind: ConstraintKind::Before,
+                    priority: 0,
+                    provenance: cp.clone(),
+                });
+            }
+            pending.push((id, cp));
+        }
     }
     chain
 }

@@ -59,6 +59,16 @@ pub enum Block {
     WallSteps(WallSteps),
     /// A web face-milled top-down in layers.
     WebFaceMill(WebFaceMill),
+    /// A flange's features limited by the permissible height of the web it
+    /// stands on (§4.1.3 "Connected walls", figure 4.6).
+    ConnectedWalls(ConnectedWalls),
+    /// Cut-outs in a wall's top edge: small ones inserted in the wall's
+    /// sequence, large ones resize the wall around them (figure 4.7).
+    Cutouts(Cutouts),
+    /// Holes in a wall: large ones split at the step separation line, the
+    /// upper half machined last (figure 4.8); small ones inserted as soon
+    /// as exposed.
+    LargeHoles(LargeHoles),
 }
 
 impl Block {
@@ -67,6 +77,9 @@ impl Block {
             Block::SideChoice(b) => &b.id,
             Block::WallSteps(b) => &b.id,
             Block::WebFaceMill(b) => &b.id,
+            Block::ConnectedWalls(b) => &b.id,
+            Block::Cutouts(b) => &b.id,
+            Block::LargeHoles(b) => &b.id,
         }
     }
 }
@@ -139,6 +152,53 @@ pub struct WebFaceMill {
     pub id: String,
     /// Depth of one layer along the spindle axis (mm).
     pub layer_depth: f64,
+}
+
+/// Figure 4.6: a flange's machining features beside the web it stands on
+/// also machine the web; they may not be wider than the web's permissible
+/// height (the web sized as a wall by the sizing model, face milling). If
+/// that leaves the flange less than its own B_RF of support, the cap is
+/// applied locally: only to the features at the flange's foot.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConnectedWalls {
+    pub id: String,
+    /// The cap on the flange features' width, in multiples of the web's
+    /// large permissible height H (1.0: figure 4.6(c)).
+    pub width_in_web_big_h: f64,
+}
+
+/// Figure 4.7: cut-outs in the top of a wall.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cutouts {
+    pub id: String,
+    /// A cut-out deeper than this multiple of the wall's small permissible
+    /// height h is large (the thesis: "less deep than the short permissible
+    /// height" is small).
+    pub large_deeper_than_h: f64,
+    /// A cut-out whose ligament (the shortest wall left between it and the
+    /// next cut-out or the wall's end) is shorter than this multiple of its
+    /// depth is large too (Van Ouwerkerk's ligament-length/depth ratio).
+    pub large_below_ligament_ratio: f64,
+    /// A large cut-out's last (bottom) feature is not made thinner than
+    /// this (mm): it is merged with the one above (figure 4.7(c), no. 5).
+    pub min_last_piece: f64,
+}
+
+/// Figure 4.8: holes through a wall.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LargeHoles {
+    pub id: String,
+    /// A hole taller (along the wall's height) than this many preferred
+    /// tool diameters D (`sizing.ron`) is large: its first step must allow
+    /// a tool entry. Thesis: 1.5.
+    pub large_above_tool_diameters: f64,
+    /// The step separation line lies this many tool diameters below the top
+    /// of the wall's highest large hole, one line for the whole row.
+    /// Thesis (Van Ouwerkerk): 2.
+    pub separation_in_tool_diameters: f64,
 }
 
 impl StrategyKnowledge {
@@ -241,6 +301,56 @@ impl StrategyKnowledge {
                                 "block `{bid}`: max_cos_to_up {} is outside 0..1",
                                 w.max_cos_to_up
                             ));
+                        }
+                    }
+                    Block::ConnectedWalls(_) | Block::Cutouts(_) | Block::LargeHoles(_) => {
+                        // Influences on the wall's steps: they must be known
+                        // before the steps are made (figure 4.13).
+                        if seen_steps {
+                            out.push(format!(
+                                "strategy {name}: `{bid}` comes after the wall steps it \
+                                 should influence"
+                            ));
+                        }
+                        if web {
+                            out.push(format!(
+                                "strategy {name}: `{bid}` applies to standing walls, not webs"
+                            ));
+                        }
+                        let mut check = |what: &str, v: f64, zero_ok: bool| {
+                            if !(v.is_finite() && (v > 0.0 || zero_ok && v == 0.0)) {
+                                out.push(format!(
+                                    "block `{bid}`: {what} {v} must be {}",
+                                    if zero_ok { "≥ 0" } else { "positive" }
+                                ));
+                            }
+                        };
+                        match b {
+                            Block::ConnectedWalls(c) => {
+                                check("width_in_web_big_h", c.width_in_web_big_h, false)
+                            }
+                            Block::Cutouts(c) => {
+                                check("large_deeper_than_h", c.large_deeper_than_h, false);
+                                check(
+                                    "large_below_ligament_ratio",
+                                    c.large_below_ligament_ratio,
+                                    true,
+                                );
+                                check("min_last_piece", c.min_last_piece, true);
+                            }
+                            Block::LargeHoles(h) => {
+                                check(
+                                    "large_above_tool_diameters",
+                                    h.large_above_tool_diameters,
+                                    false,
+                                );
+                                check(
+                                    "separation_in_tool_diameters",
+                                    h.separation_in_tool_diameters,
+                                    false,
+                                );
+                            }
+                            _ => {}
                         }
                     }
                     Block::WebFaceMill(f) => {
