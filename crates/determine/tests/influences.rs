@@ -1,0 +1,407 @@
+//! Independent checks of the influence blocks (thesis §4.1.3): large holes
+//! (figure 4.8), cut-outs (figure 4.7) and connected walls (figure 4.6), on
+//! the sample parts, measured from the part's own geometry.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::DVec3;
+use thinplan_brep::{Brep, Surface};
+use thinplan_determine::{determine, prism_points, Determination};
+use thinplan_knowledge::{Block, Knowledge};
+use thinplan_plan::{
+    MachiningFeature, MachiningFeatureId, Plan, Provenance, ProvenanceSource, Setup, Stage,
+    StiffnessKind, WallRole,
+};
+use thinplan_sizing::{MillingMode, Wall};
+
+fn planned(name: &str, k: &Knowledge) -> (Plan, Brep, Determination) {
+    let imported = thinplan_import::import(&format!("builtin:{name}")).expect("imports");
+    let setup = Setup {
+        up: DVec3::Z,
+        machine: thinplan_knowledge::DEFAULT_MACHINE.into(),
+        tool_set: thinplan_knowledge::DEFAULT_TOOL_SET.into(),
+        material: thinplan_knowledge::DEFAULT_MATERIAL.into(),
+        provenance: Provenance::new(ProvenanceSource::Default, "test"),
+    };
+    let mut plan = Plan::new(imported.part, setup);
+    let machine = k.machine(&plan.setup.machine).unwrap();
+    let r = thinplan_recognise::recognise(&imported.brep, plan.setup.up, k, machine);
+    plan.stiffness_features = r.features;
+    plan.connections = r.connections;
+    plan.stages_done.extend([Stage::Recognise, Stage::Connect]);
+    thinplan_sequence::run(&plan, k).apply_to(&mut plan);
+    let d = determine(&plan, &imported.brep, k).expect("determines");
+    (plan, imported.brep, d)
+}
+
+fn v(f: &MachiningFeature, name: &str) -> f64 {
+    *f.provenance
+        .values
+        .get(name)
+        .unwrap_or_else(|| panic!("{} has no `{name}`: {:?}", f.id, f.provenance))
+}
+
+/// The z extent of a feature, from its prism's corners.
+fn z_span(f: &MachiningFeature) -> (f64, f64) {
+    prism_points(&f.shape)
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.z), hi.max(p.z))
+        })
+}
+
+/// `a` is machined before `b`: a path of `Before` constraints (my own
+/// depth-first search).
+fn precedes(d: &Determination, a: MachiningFeatureId, b: MachiningFeatureId) -> bool {
+    let mut succ: BTreeMap<MachiningFeatureId, Vec<MachiningFeatureId>> = BTreeMap::new();
+    for c in &d.constraints {
+        succ.entry(c.first).or_default().push(c.second);
+    }
+    let mut seen = BTreeSet::new();
+    let mut stack = vec![a];
+    while let Some(x) = stack.pop() {
+        if x == b && x != a {
+            return true;
+        }
+        for &y in succ.get(&x).map(Vec::as_slice).unwrap_or(&[]) {
+            if seen.insert(y) {
+                stack.push(y);
+            }
+        }
+    }
+    false
+}
+
+fn by_rule<'a>(d: &'a Determination, rule: &str) -> Vec<&'a MachiningFeature> {
+    d.features
+        .iter()
+        .filter(|f| f.provenance.rule == rule)
+        .collect()
+}
+
+fn set_holes(k: &mut Knowledge, f: impl Fn(&mut thinplan_knowledge::LargeHoles)) {
+    for s in &mut k.strategies.strategies {
+        for b in &mut s.blocks {
+            if let Block::LargeHoles(h) = b {
+                f(h);
+            }
+        }
+    }
+}
+
+#[test]
+fn the_step_separation_line_lies_two_tool_diameters_below_the_highest_hole_top() {
+    let k = Knowledge::builtin().unwrap();
+    let (_, brep, d) = planned("wall_holes", &k);
+    // From the B-rep: the holes are the cylinders across the wall (axis y).
+    let tops: Vec<f64> = brep
+        .faces
+        .iter()
+        .filter_map(|f| match &f.surface {
+            Surface::Cylinder { frame, radius } if frame.z.y.abs() > 0.99 => {
+                Some(frame.origin.z + radius)
+            }
+            _ => None,
+        })
+        .collect();
+    assert_eq!(tops.len(), 4, "wall_holes has four holes");
+    let highest = tops.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let part_top = brep
+        .vertices
+        .iter()
+        .map(|p| p.point.z)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let d_tool = k.sizing.preferred_tool_diameter;
+    let line = highest - 2.0 * d_tool;
+    // The line as the plan has it (the part measure above, within 0.05).
+    let planned_line = part_top - v(by_rule(&d, "strategies.large_holes")[0], "separation_depth");
+    println!("hole top z = {highest}, line z = {line}, part top z = {part_top}");
+    let walls = by_rule(&d, "strategies.wall_steps");
+    let holes = by_rule(&d, "strategies.large_holes");
+    assert_eq!(walls.len() + holes.len(), d.features.len());
+    // Every hole is large (25 mm > 1.5 · 12 mm): an upper half each, from
+    // its top down to the line.
+    let uppers: Vec<_> = holes
+        .iter()
+        .filter(|f| (z_span(f).1 - highest).abs() < 0.1)
+        .collect();
+    assert_eq!(uppers.len(), 4);
+    for u in &uppers {
+        assert_eq!(v(u, "hole_diameter"), 25.0);
+        assert_eq!(v(u, "large"), 1.0);
+        // The recognised hole is a polygon with its corners on the circle,
+        // so its top may lie a little below the circle's (0.035 mm here).
+        assert!((z_span(u).0 - line).abs() < 0.05, "{:?}", z_span(u));
+        assert!((v(u, "separation_depth") - (part_top - line)).abs() < 0.05);
+    }
+    // A wall step boundary on the line, on both sides of the wall.
+    for side in [1.0, -1.0] {
+        assert!(
+            walls
+                .iter()
+                .any(|w| v(w, "side") == side && (z_span(w).0 - planned_line).abs() < 1e-6),
+            "no step ends on the line on side {side}"
+        );
+        assert!(walls
+            .iter()
+            .any(|w| v(w, "side") == side && (z_span(w).1 - planned_line).abs() < 1e-6));
+    }
+    // No wall step crosses the line.
+    for w in &walls {
+        let (lo, hi) = z_span(w);
+        assert!(
+            !(lo < planned_line - 1e-6 && hi > planned_line + 1e-6),
+            "{} crosses",
+            w.id
+        );
+    }
+}
+
+#[test]
+fn the_upper_hole_halves_come_after_the_wall_around_them_and_before_the_rest() {
+    let k = Knowledge::builtin().unwrap();
+    let (_, _, d) = planned("wall_holes", &k);
+    let walls = by_rule(&d, "strategies.wall_steps");
+    let holes = by_rule(&d, "strategies.large_holes");
+    let line_depth = v(holes[0], "separation_depth");
+    for hf in &holes {
+        let (from, to) = (v(hf, "depth_from"), v(hf, "depth_to"));
+        let upper = to <= line_depth + 1e-6;
+        for w in &walls {
+            let (wf, wt) = (v(w, "depth_from"), v(w, "depth_to"));
+            if upper {
+                // Figure 4.8: the upper half of the hole last: after every
+                // wall step above the line (both sides), before every one
+                // below it.
+                if wt <= line_depth + 1e-6 {
+                    assert!(precedes(&d, w.id, hf.id), "{} before {}", w.id, hf.id);
+                } else {
+                    assert!(precedes(&d, hf.id, w.id), "{} before {}", hf.id, w.id);
+                }
+            } else if wf >= to - 1e-6 {
+                // A lower piece is machined before the steps below it.
+                assert!(precedes(&d, hf.id, w.id));
+            }
+        }
+        if !upper {
+            // … and after some step that exposed it.
+            assert!(walls
+                .iter()
+                .any(|w| v(w, "depth_to") >= to - 1e-6 && precedes(&d, w.id, hf.id)));
+            assert!(from >= line_depth - 1e-6);
+        }
+    }
+}
+
+#[test]
+fn the_knowledge_constants_move_the_line_and_decide_what_is_large() {
+    let k = Knowledge::builtin().unwrap();
+    let (_, _, base) = planned("wall_holes", &k);
+    let depth = |d: &Determination| v(by_rule(d, "strategies.large_holes")[0], "separation_depth");
+    // One tool diameter instead of two: the line 12 mm higher.
+    let mut k1 = k.clone();
+    set_holes(&mut k1, |h| h.separation_in_tool_diameters = 1.0);
+    let (_, _, d1) = planned("wall_holes", &k1);
+    assert!((depth(&base) - depth(&d1) - 12.0).abs() < 1e-6);
+    assert_ne!(base, d1);
+    // Large only above 3 · D = 36 mm: the 25 mm holes are small, machined
+    // whole as soon as exposed, and the wall has no line.
+    let mut k2 = k.clone();
+    set_holes(&mut k2, |h| h.large_above_tool_diameters = 3.0);
+    let (_, _, d2) = planned("wall_holes", &k2);
+    let holes = by_rule(&d2, "strategies.large_holes");
+    assert_eq!(holes.len(), 4);
+    for h in &holes {
+        assert_eq!(v(h, "large"), 0.0);
+        assert!(!h.provenance.values.contains_key("separation_depth"));
+    }
+    // Dropping the block: no hole features, the wall as before.
+    let mut k3 = k.clone();
+    for s in &mut k3.strategies.strategies {
+        s.blocks.retain(|b| !matches!(b, Block::LargeHoles(_)));
+    }
+    assert!(k3.strategies.problems().is_empty());
+    let (_, _, d3) = planned("wall_holes", &k3);
+    assert!(by_rule(&d3, "strategies.large_holes").is_empty());
+    println!(
+        "wall_holes: {} features with the line, {} without the block",
+        base.features.len(),
+        d3.features.len()
+    );
+}
+
+#[test]
+fn small_cutouts_sit_between_the_step_that_exposes_them_and_the_next() {
+    let k = Knowledge::builtin().unwrap();
+    let (plan, _, d) = planned("wing_rib", &k);
+    let cuts = by_rule(&d, "strategies.cutouts");
+    assert_eq!(cuts.len(), 4, "the four stringer cut-outs");
+    for c in &cuts {
+        assert_eq!(v(c, "large"), 0.0);
+        let sf = plan
+            .stiffness_features
+            .iter()
+            .find(|s| s.id == c.owner)
+            .unwrap();
+        assert_eq!(sf.kind, StiffnessKind::Cutout);
+        // Its wall's steps, in their order.
+        let wall = v(c, "wall") as u32;
+        let steps: Vec<_> = d
+            .features
+            .iter()
+            .filter(|f| f.owner.0 == wall && f.provenance.rule == "strategies.wall_steps")
+            .collect();
+        // The first step reaching the cut-out's bottom comes before it …
+        let exposing = steps
+            .iter()
+            .position(|s| v(s, "depth_to") >= v(c, "depth_to") - 1e-6)
+            .unwrap();
+        assert!(precedes(&d, steps[exposing].id, c.id));
+        // … and the next one after it; no step in between.
+        if let Some(next) = steps.get(exposing + 1) {
+            assert!(precedes(&d, c.id, next.id));
+        }
+        for s in &steps[..exposing] {
+            assert!(precedes(&d, s.id, c.id));
+        }
+    }
+}
+
+#[test]
+fn large_cutouts_resize_the_wall_beside_them_and_take_the_larger_height() {
+    let k = Knowledge::builtin().unwrap();
+    let (_, brep, d) = planned("flange_cutouts", &k);
+    let cuts = by_rule(&d, "strategies.cutouts");
+    assert_eq!(cuts.len(), 3);
+    // Ligament from the geometry: the cut-outs' straight sides (planes
+    // across x) and the flange's ends.
+    let top = brep
+        .vertices
+        .iter()
+        .map(|p| p.point.z)
+        .fold(f64::NEG_INFINITY, f64::max);
+    for c in &cuts {
+        assert_eq!(v(c, "large"), 1.0, "15 mm deep > h = 12 mm");
+        let (lo, hi) = z_span(c);
+        assert!(hi >= top - 1e-6);
+        assert!((v(c, "cutout_depth") - (top - lo)).abs() < 1e-6);
+        assert!((v(c, "ligament_length") - 34.0).abs() < 1e-6);
+    }
+    // The flange's steps beside the cut-outs were sized again (smaller H)
+    // than the steps below them.
+    let steps = by_rule(&d, "strategies.wall_steps");
+    let depth = v(cuts[0], "cutout_depth");
+    let wall = v(cuts[0], "wall") as u32;
+    let (beside, below): (Vec<&MachiningFeature>, Vec<&MachiningFeature>) = steps
+        .into_iter()
+        .filter(|s| s.owner.0 == wall)
+        .partition(|s| v(s, "depth_to") <= depth + 1e-6);
+    assert!(!beside.is_empty() && !below.is_empty());
+    assert!(beside.iter().all(|s| v(s, "big_h") < v(below[0], "big_h")));
+    // Each cut-out piece after every step beside it.
+    for c in &cuts {
+        for s in &beside {
+            assert!(precedes(&d, s.id, c.id));
+        }
+    }
+    // With a threshold of 2 · h the cut-outs are small: no resizing, inserted
+    // as soon as exposed.
+    let mut k2 = k.clone();
+    for s in &mut k2.strategies.strategies {
+        for b in &mut s.blocks {
+            if let Block::Cutouts(c) = b {
+                c.large_deeper_than_h = 2.0;
+                c.large_below_ligament_ratio = 0.0;
+            }
+        }
+    }
+    let (_, _, d2) = planned("flange_cutouts", &k2);
+    let steps2 = by_rule(&d2, "strategies.wall_steps");
+    let big_h: BTreeSet<u64> = steps2.iter().map(|s| v(s, "big_h") as u64).collect();
+    assert_eq!(big_h.len(), 1, "one size over the whole flange");
+    assert!(by_rule(&d2, "strategies.cutouts")
+        .iter()
+        .all(|c| v(c, "large") == 0.0));
+    println!(
+        "flange_cutouts: H beside the cut-outs {} vs {} below; small: {:?}",
+        v(beside[0], "big_h"),
+        v(below[0], "big_h"),
+        big_h
+    );
+}
+
+#[test]
+fn a_flanges_features_are_no_wider_than_the_webs_permissible_height() {
+    let k = Knowledge::builtin().unwrap();
+    let e = k
+        .material(thinplan_knowledge::DEFAULT_MATERIAL)
+        .unwrap()
+        .youngs_modulus;
+    for (name, factor) in [
+        ("flange_cutouts", 1.0),
+        ("flange_web_slot", 1.0),
+        ("wing_rib", 1.0),
+        ("flange_web_slot", 0.1),
+    ] {
+        let mut k = k.clone();
+        for s in &mut k.strategies.strategies {
+            for b in &mut s.blocks {
+                if let Block::ConnectedWalls(c) = b {
+                    c.width_in_web_big_h = factor;
+                }
+            }
+        }
+        let (plan, _, d) = planned(name, &k);
+        let (mut checked, mut local) = (0, 0);
+        for f in by_rule(&d, "strategies.wall_steps") {
+            let sf = plan
+                .stiffness_features
+                .iter()
+                .find(|s| s.id == f.owner)
+                .unwrap();
+            if sf.role != Some(WallRole::Flange) {
+                continue;
+            }
+            // The web it stands on, sized by me as a wall (face milling).
+            let web = plan
+                .connections
+                .iter()
+                .filter(|c| c.leaf == sf.id)
+                .filter_map(|c| plan.stiffness_features.iter().find(|w| w.id == c.base))
+                .find(|w| w.role == Some(WallRole::Web))
+                .unwrap();
+            let ws = thinplan_sizing::size_wall(
+                &Wall {
+                    length: web.length,
+                    thickness: web.thickness.unwrap(),
+                    height: web.height,
+                },
+                &k.sizing,
+                e,
+                MillingMode::Face,
+            )
+            .unwrap();
+            assert_eq!(v(f, "web_big_h"), ws.big_h);
+            let at_foot = (v(f, "depth_to") - sf.height).abs() < 1e-6;
+            let cap = factor * ws.big_h;
+            if at_foot || v(f, "local") == 0.0 {
+                assert!(v(f, "width") <= cap + 1e-9, "{name} {}", f.id);
+            }
+            if cap < v(f, "b_rf") {
+                // The cap is below B_RF: the flange keeps its support above
+                // its foot (applied locally, figure 4.6).
+                assert_eq!(v(f, "local"), 1.0);
+                if !at_foot {
+                    assert_eq!(v(f, "width"), v(f, "b_rf"));
+                } else {
+                    assert_eq!(v(f, "width"), cap);
+                    local += 1;
+                }
+            }
+            checked += 1;
+        }
+        assert!(checked > 0, "{name}");
+        assert_eq!(local > 0, factor < 1.0, "{name} ×{factor}");
+        println!("{name} ×{factor}: {checked} flange features checked, {local} capped at the foot");
+    }
+}
