@@ -58,6 +58,9 @@ struct Geometry {
     /// The feature region itself, sampled.
     region_polys: Vec<Vec<DVec2>>,
     product: Vec<Edge2>,
+    /// Boundaries of the free space around the feature (other product the
+    /// tool must keep r from, see `free.rs`).
+    keep_out: Vec<Edge2>,
 }
 
 fn sides_class(edges: &[(Vec<Edge2>, Vec<Adjacency>)]) -> SidesMatch {
@@ -102,21 +105,47 @@ fn smallest_product_corner(edges: &[(Vec<Edge2>, Vec<Adjacency>)]) -> Option<f64
     best
 }
 
-fn geometry(f: &MachiningFeature, m: &Method, tool: &Tool) -> Option<Geometry> {
+fn geometry(
+    f: &MachiningFeature,
+    m: &Method,
+    tool: &Tool,
+    free: Option<&crate::free::Shapes>,
+) -> Option<Geometry> {
     let d = tool.diameter;
     let r = d / 2.0;
     let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
     let mut product = Vec::new();
+    let keep_out: Vec<Edge2> = free
+        .map(|free| {
+            free.iter()
+                .flat_map(|s| s.iter())
+                .flat_map(|c| {
+                    let n = c.len();
+                    (0..n).map(move |i| Edge2 {
+                        a: DVec2::new(c[i][0], c[i][1]),
+                        b: DVec2::new(c[(i + 1) % n][0], c[(i + 1) % n][1]),
+                        bulge: 0.0,
+                    })
+                })
+                .collect()
+        })
+        .unwrap_or_default();
     let mut loops = Vec::new();
     for (k, (es, adj)) in edges.iter().enumerate() {
         // Tool edge may pass `overhang·D` beyond a non-product edge: the
         // loop is moved out by that, then the whole offset in by r.
         let out: Vec<f64> = adj
             .iter()
-            .map(|a| match a {
-                Adjacency::Product => 0.0,
-                Adjacency::Open => m.overhang.open * d,
-                Adjacency::Feature => m.overhang.feature * d,
+            .zip(es)
+            .map(|(a, e)| {
+                let wanted = match a {
+                    Adjacency::Product => 0.0,
+                    Adjacency::Open => m.overhang.open * d,
+                    Adjacency::Feature => m.overhang.feature * d,
+                };
+                // Never so far that the tool reaches product beyond the
+                // edge (an open edge may face a narrow strip beside a wall).
+                wanted.min(clearance(e, &keep_out))
             })
             .collect();
         for (e, a) in es.iter().zip(adj) {
@@ -165,7 +194,43 @@ fn geometry(f: &MachiningFeature, m: &Method, tool: &Tool) -> Option<Geometry> {
         centre_polys,
         region_polys,
         product,
+        keep_out,
     })
+}
+
+/// Room beyond an edge (on its outward, right-hand side) before the free
+/// space ends, mm: the smallest distance from the edge to a free-space
+/// boundary segment that lies at least partly beyond it.
+fn clearance(e: &Edge2, keep_out: &[Edge2]) -> f64 {
+    let dir = (e.b - e.a).normalize_or_zero();
+    let outward = DVec2::new(dir.y, -dir.x);
+    let beyond = |p: DVec2| (p - e.a).dot(outward) > 1e-9;
+    keep_out
+        .iter()
+        .filter(|s| beyond(s.a) || beyond(s.b))
+        .map(|s| seg_seg_distance(e.a, e.b, s.a, s.b))
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn seg_seg_distance(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> f64 {
+    let cross = |o: DVec2, p: DVec2, q: DVec2| (p - o).perp_dot(q - o);
+    let (d1, d2, d3, d4) = (
+        cross(c, d, a),
+        cross(c, d, b),
+        cross(a, b, c),
+        cross(a, b, d),
+    );
+    if (d1 > 0.0) != (d2 > 0.0) && (d3 > 0.0) != (d4 > 0.0) {
+        return 0.0;
+    }
+    [
+        crate::geom::dist_point_seg(a, c, d),
+        crate::geom::dist_point_seg(b, c, d),
+        crate::geom::dist_point_seg(c, a, b),
+        crate::geom::dist_point_seg(d, a, b),
+    ]
+    .into_iter()
+    .fold(f64::INFINITY, f64::min)
 }
 
 fn product_distance(p: DVec2, product: &[Edge2]) -> f64 {
@@ -551,7 +616,11 @@ fn levels(top: f64, bottom: f64, depth: f64) -> Vec<f64> {
         .collect()
 }
 
-pub(crate) fn feature_operations(f: &MachiningFeature, env: &Env) -> Result<Made, String> {
+pub(crate) fn feature_operations(
+    f: &MachiningFeature,
+    env: &Env,
+    free: Option<&crate::free::Shapes>,
+) -> Result<Made, String> {
     let mk = &env.k.methods;
     let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
     if edges[0].0.len() < 2 {
@@ -599,7 +668,7 @@ pub(crate) fn feature_operations(f: &MachiningFeature, env: &Env) -> Result<Made
     }
     let (tool, g) = cands
         .iter()
-        .find_map(|t| geometry(f, m, t).map(|g| (*t, g)))
+        .find_map(|t| geometry(f, m, t, free).map(|g| (*t, g)))
         .ok_or("no tool of the set-up's tool set fits")?;
     let d = tool.diameter;
     let (rpm, feed_rough, feed_finish) = conditions(env, tool);
@@ -1201,7 +1270,8 @@ fn check(
             if p.z < z_min - 1e-9 {
                 return Err(format!("a move goes below the floor at z {:.4}", p.z));
             }
-            let dist = product_distance(p.truncate(), &g.product);
+            let dist = product_distance(p.truncate(), &g.product)
+                .min(product_distance(p.truncate(), &g.keep_out));
             if dist < g.r - EPS {
                 return Err(format!(
                     "a move would touch product: tool centre ({:.3}, {:.3}) is {:.4} mm from a \

@@ -13,6 +13,7 @@
 //! times from `thinplan-feeds` under the machine's limits. [`order`] is
 //! stage 8.
 
+mod free;
 pub mod geom;
 mod layers;
 pub mod order;
@@ -145,15 +146,71 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         warnings: Vec::new(),
         refusals: Vec::new(),
     };
-    for f in &plan.machining_features {
-        // A geometry library panicking on an awkward profile (cavalier_contours
-        // asserts on some degenerate offsets) refuses this feature, not the plan.
-        let made = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            layers::feature_operations(f, &env)
-        }))
-        .unwrap_or_else(|_| {
-            Err("the offset geometry failed on this profile (library panic)".into())
-        });
+    let d_max = tools.tools.iter().map(|t| t.diameter).fold(0.0, f64::max);
+    // Features that get no operation, and every feature they cover from
+    // the tool side (accessibility constraints): machining those would
+    // plunge or rapid into material that is still there.
+    let mut skipped: std::collections::BTreeMap<usize, String> = plan
+        .machining_features
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.provenance.values.get("access_blocked") == Some(&1.0))
+        .map(|(i, _)| {
+            (
+                i,
+                "the part covers it from the tool side (another set-up)".to_string(),
+            )
+        })
+        .collect();
+    let mut made: Vec<Option<Result<layers::Made, String>>> =
+        (0..plan.machining_features.len()).map(|_| None).collect();
+    loop {
+        for (i, f) in plan.machining_features.iter().enumerate() {
+            if made[i].is_some() || skipped.contains_key(&i) {
+                continue;
+            }
+            let free = free::free_space(plan, i, 2.0 * d_max);
+            // A geometry library panicking on an awkward profile
+            // (cavalier_contours asserts on some degenerate offsets) refuses
+            // this feature, not the plan.
+            let m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                layers::feature_operations(f, &env, free.as_ref())
+            }))
+            .unwrap_or_else(|_| {
+                Err("the offset geometry failed on this profile (library panic)".into())
+            });
+            made[i] = Some(m);
+        }
+        let mut changed = false;
+        for c in &plan.machining_constraints {
+            if c.provenance.rule != "interference.accessibility" {
+                continue;
+            }
+            let (a, b) = (c.first.0 as usize, c.second.0 as usize);
+            let a_fails = skipped.contains_key(&a) || matches!(made[a], Some(Err(_)));
+            if a_fails && !skipped.contains_key(&b) {
+                skipped.insert(b, format!("{} above it gets no operation", c.first));
+                made[b] = None;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    for (i, f) in plan.machining_features.iter().enumerate() {
+        if let Some(reason) = skipped.get(&i) {
+            out.warnings
+                .push(format!("{}: not machined: {reason}", f.id));
+            out.refusals.push(Refusal {
+                stage: Stage::Operations,
+                rule: "operations.feature".into(),
+                reason: format!("no operation for {}: {reason}", f.id),
+                provenance: Provenance::new(ProvenanceSource::Default, "operations.feature"),
+            });
+            continue;
+        }
+        let made = made[i].take().expect("computed above");
         match made {
             Ok(made) => {
                 out.warnings.extend(made.warnings);

@@ -73,6 +73,8 @@ pub struct Resolution {
     /// Machining order used for adjacency (a topological order of the
     /// constraints, lowest id first among the ready ones).
     pub order: Vec<MachiningFeatureId>,
+    /// The blank in the set-up frame: (min, max) corners.
+    pub blank: ([f64; 3], [f64; 3]),
 }
 
 impl Resolution {
@@ -83,6 +85,17 @@ impl Resolution {
         plan.machining_features = self.features;
         plan.machining_constraints = self.constraints;
         plan.refusals.extend(self.refusals);
+        for (k, x) in [
+            ("resolve.blank_min_x", self.blank.0[0]),
+            ("resolve.blank_min_y", self.blank.0[1]),
+            ("resolve.blank_min_z", self.blank.0[2]),
+            ("resolve.blank_max_x", self.blank.1[0]),
+            ("resolve.blank_max_y", self.blank.1[1]),
+            ("resolve.blank_max_z", self.blank.1[2]),
+        ] {
+            // Full precision: later stages rebuild the product from it.
+            plan.notes.insert(k.into(), format!("{x:?}"));
+        }
         let v = self.volumes;
         for (k, x) in [
             ("resolve.blank_volume", v.blank),
@@ -169,6 +182,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
         hi = hi.max(*p);
     }
     let blank_rect = section::rect([lo.x, lo.y], [hi.x, hi.y]);
+    out.blank = ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z]);
     out.volumes.blank = (hi - lo).x * (hi - lo).y * (hi - lo).z;
     out.volumes.part = brep.volume();
 
@@ -443,6 +457,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
     if kn.accessibility {
         accessibility(&geo, &slabs, kn.sliver_area, &mut graph, &mut out);
     }
+    blocked_from_up(&geo, &slabs, kn.sliver_area, &mut out);
     out.order = graph.topological_order();
     adjacency(&mut out, &geo, &slabs, [lo.x, lo.y, hi.x, hi.y], lo.z);
     Ok(out)
@@ -1003,6 +1018,45 @@ fn redirect(
     }
 }
 
+/// Provenance rule of features the part covers from the tool-access side.
+pub const RULE_BLOCKED: &str = "interference.access_blocked";
+
+/// A feature with product above it (an undercut: a hole through a standing
+/// wall, material under an overhang) cannot be reached along up in this
+/// set-up: it is marked (`access_blocked` = 1 in its provenance) and a
+/// refusal says why, so later stages leave it to another set-up.
+fn blocked_from_up(geo: &[Geo], slabs: &[Slab], sliver: f64, out: &mut Resolution) {
+    for (i, g) in geo.iter().enumerate() {
+        let covered = slabs[g.top_slab + 1..]
+            .iter()
+            .map(|s| section::area(&section::intersection(&g.region, &s.part)))
+            .fold(0.0, f64::max);
+        if covered > sliver {
+            let f = &mut out.features[i];
+            f.provenance.values.insert("access_blocked".into(), 1.0);
+            f.provenance.note = format!(
+                "{}; the part covers {covered:.2} mm² of it from above: not reachable along up",
+                f.provenance.note
+            );
+            let mut p = Provenance::new(ProvenanceSource::Knowledge, RULE_BLOCKED)
+                .with_value("covered_area", covered)
+                .with_value("first", f64::from(f.id.0))
+                .with_value("second", f64::from(f.id.0));
+            p.note = "needs another set-up or side access".into();
+            out.refusals.push(Refusal {
+                stage: Stage::Resolve,
+                rule: RULE_BLOCKED.into(),
+                reason: format!(
+                    "{} lies under the part ({covered:.2} mm² covered from above): it cannot be \
+                     machined along this set-up's up",
+                    f.id
+                ),
+                provenance: p,
+            });
+        }
+    }
+}
+
 /// A feature lying on top of another (touching, overlapping in plan view)
 /// blocks its tool access from above: it comes first.
 fn accessibility(
@@ -1013,15 +1067,15 @@ fn accessibility(
     out: &mut Resolution,
 ) {
     // Features by their bottom slab, to find who sits on whom.
-    let mut by_top: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    let mut by_bottom: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for (i, g) in geo.iter().enumerate() {
-        by_top.entry(g.top_slab).or_default().push(i);
+        by_bottom.entry(g.bottom_slab).or_default().push(i);
     }
     for (b, gb) in geo.iter().enumerate() {
         if gb.top_slab + 1 >= slabs.len() {
             continue;
         }
-        let Some(above) = by_top.get(&(gb.top_slab + 1)).map(|v| v.to_vec()) else {
+        let Some(above) = by_bottom.get(&(gb.top_slab + 1)).map(|v| v.to_vec()) else {
             continue;
         };
         for a in above {

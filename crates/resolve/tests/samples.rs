@@ -212,3 +212,76 @@ fn constraints_stay_acyclic_and_adjacency_is_complete() {
         );
     }
 }
+
+/// A feature lying on another (touching along up, overlapping in plan
+/// view, found here by sampling) is machined before it: the tool comes
+/// from above.
+#[test]
+fn a_feature_on_top_of_another_comes_first() {
+    for name in SAMPLES {
+        let s = planned(name);
+        let mf = &s.plan.machining_features;
+        let n = mf.len();
+        let mut succ = vec![Vec::new(); n];
+        for c in &s.plan.machining_constraints {
+            succ[c.first.0 as usize].push(c.second.0 as usize);
+        }
+        let reaches = |a: usize, b: usize| {
+            let mut seen = vec![false; n];
+            let mut stack = vec![a];
+            while let Some(v) = stack.pop() {
+                if v == b {
+                    return true;
+                }
+                for &w in &succ[v] {
+                    if !seen[w] {
+                        seen[w] = true;
+                        stack.push(w);
+                    }
+                }
+            }
+            false
+        };
+        for (b, fb) in mf.iter().enumerate() {
+            let outer = pts(&fb.shape.region.outer);
+            let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for p in &outer {
+                for k in 0..2 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            for (a, fa) in mf.iter().enumerate() {
+                if a == b || (fa.shape.z_min - fb.shape.z_max).abs() > 1e-6 {
+                    continue;
+                }
+                let z = 0.5 * (fb.shape.z_min + fb.shape.z_max);
+                let z_above = fa.shape.z_min + 1e-3;
+                let fr = &fb.shape.frame;
+                let y = fr.z.cross(fr.x);
+                let mut shared = false;
+                'grid: for i in 1..20 {
+                    for j in 1..20 {
+                        let (u, v) = (
+                            lo[0] + (hi[0] - lo[0]) * i as f64 / 20.0,
+                            lo[1] + (hi[1] - lo[1]) * j as f64 / 20.0,
+                        );
+                        let p = fr.origin + fr.x * u + y * v;
+                        if in_feature(fb, p + fr.z * z) && in_feature(fa, p + fr.z * z_above) {
+                            shared = true;
+                            break 'grid;
+                        }
+                    }
+                }
+                if shared {
+                    assert!(
+                        reaches(a, b),
+                        "{name}: {} lies on {} but is not before it",
+                        fa.id,
+                        fb.id
+                    );
+                }
+            }
+        }
+    }
+}

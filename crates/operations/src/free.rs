@@ -1,0 +1,137 @@
+//! Where a tool may be around a feature: the space that is not product at
+//! any height of the feature, reconstructed from the resolved plan itself.
+//!
+//! After stage 6 the machining features and the part fill the blank
+//! exactly, so at a height z the product in plan view is the blank minus
+//! every feature spanning z. A feature's own adjacency only tells about its
+//! edges; an `open` edge may face a narrow strip already cut beside a wall,
+//! and a tool overhanging it would reach the wall. The tool-centre region is
+//! therefore also kept inside this free space eroded by the tool radius.
+
+use i_overlay::core::fill_rule::FillRule;
+use i_overlay::core::overlay_rule::OverlayRule;
+use i_overlay::float::single::SingleFloatOverlay;
+use thinplan_plan::{MachiningFeature, Plan, ProfileLoop};
+
+/// Shapes: each an outer contour then holes.
+pub(crate) type Shapes = Vec<Vec<Vec<[f64; 2]>>>;
+
+/// The blank's plan-view box in the set-up frame, as stage 6 recorded it.
+pub(crate) fn blank_rect(plan: &Plan) -> Option<[f64; 4]> {
+    let get = |k: &str| plan.notes.get(k).and_then(|v| v.parse::<f64>().ok());
+    Some([
+        get("resolve.blank_min_x")?,
+        get("resolve.blank_min_y")?,
+        get("resolve.blank_max_x")?,
+        get("resolve.blank_max_y")?,
+    ])
+}
+
+fn contour(l: &ProfileLoop) -> Vec<[f64; 2]> {
+    // Resolved features have straight edges; arcs (bulges) are taken as
+    // chords here, which only matters for synthetic plans.
+    l.vertices.iter().map(|v| [v.x, v.y]).collect()
+}
+
+fn region(f: &MachiningFeature) -> Vec<Vec<[f64; 2]>> {
+    let mut c = vec![contour(&f.shape.region.outer)];
+    c.extend(f.shape.region.holes.iter().map(contour));
+    c
+}
+
+fn bbox(f: &MachiningFeature) -> [f64; 4] {
+    let mut b = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for v in &f.shape.region.outer.vertices {
+        b[0] = b[0].min(v.x);
+        b[1] = b[1].min(v.y);
+        b[2] = b[2].max(v.x);
+        b[3] = b[3].max(v.y);
+    }
+    b
+}
+
+fn same_frame(a: &MachiningFeature, b: &MachiningFeature) -> bool {
+    let (fa, fb) = (&a.shape.frame, &b.shape.frame);
+    (fa.origin - fb.origin).length() < 1e-9
+        && (fa.x - fb.x).length() < 1e-9
+        && (fa.z - fb.z).length() < 1e-9
+}
+
+/// The free space around `plan.machining_features[i]` within `margin` of it:
+/// points that are no product at any height of the feature (inside another
+/// feature or the feature itself at every height, or outside the blank).
+/// `None` when the plan is not resolved (no blank recorded) or the features
+/// do not share one frame.
+pub(crate) fn free_space(plan: &Plan, i: usize, margin: f64) -> Option<Shapes> {
+    let blank = blank_rect(plan)?;
+    let f = &plan.machining_features[i];
+    let fb = bbox(f);
+    let near = |g: &MachiningFeature| {
+        let b = bbox(g);
+        b[0] <= fb[2] + margin
+            && fb[0] <= b[2] + margin
+            && b[1] <= fb[3] + margin
+            && fb[1] <= b[3] + margin
+    };
+    let eps = 1e-9;
+    let (lo, hi) = (f.shape.z_min, f.shape.z_max);
+    let mut others = Vec::new();
+    for (j, g) in plan.machining_features.iter().enumerate() {
+        if j == i || !near(g) {
+            continue;
+        }
+        if !same_frame(f, g) {
+            return None;
+        }
+        if g.shape.z_max > lo + eps && g.shape.z_min < hi - eps {
+            others.push(g);
+        }
+    }
+    let mut breaks = vec![lo, hi];
+    for g in &others {
+        for z in [g.shape.z_min, g.shape.z_max] {
+            if z > lo + eps && z < hi - eps {
+                breaks.push(z);
+            }
+        }
+    }
+    breaks.sort_by(f64::total_cmp);
+    breaks.dedup_by(|a, b| (*a - *b).abs() < eps);
+    let window = [
+        fb[0] - margin,
+        fb[1] - margin,
+        fb[2] + margin,
+        fb[3] + margin,
+    ];
+    let rect = |b: [f64; 4]| vec![vec![[b[0], b[1]], [b[2], b[1]], [b[2], b[3]], [b[0], b[3]]]];
+    // Outside the blank is air.
+    let outside: Shapes =
+        rect(window).overlay_as::<i64>(&rect(blank), OverlayRule::Difference, FillRule::NonZero);
+    let mut free: Option<Shapes> = None;
+    for w in breaks.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let mut cover: Vec<Vec<[f64; 2]>> = region(f);
+        for g in &others {
+            if g.shape.z_min <= a + eps && g.shape.z_max >= b - eps {
+                cover.extend(region(g));
+            }
+        }
+        let cover: Shapes = cover.overlay_as::<i64>(
+            &Vec::<Vec<[f64; 2]>>::new(),
+            OverlayRule::Subject,
+            FillRule::NonZero,
+        );
+        free = Some(match free {
+            None => cover,
+            Some(prev) => prev.overlay_as::<i64>(&cover, OverlayRule::Intersect, FillRule::NonZero),
+        });
+    }
+    let free = free.unwrap_or_default();
+    let free: Shapes = free.overlay_as::<i64>(&outside, OverlayRule::Union, FillRule::NonZero);
+    Some(free)
+}
