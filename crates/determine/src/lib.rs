@@ -15,6 +15,11 @@
 //!   wall over `[t/2, t/2 + width]` (width = B_RF · `width_in_b_rf`, cut back
 //!   to the blank); they are chained top-down alternating sides: A1, the
 //!   small features A1 covers, A2, …;
+//! - `ConnectedWalls`, `Cutouts`, `LargeHoles` (figures 4.6–4.8) are read
+//!   before `WallSteps`, which effectuates them once the wall is sized:
+//!   step boundaries (the step separation line), zones with other sizes, a
+//!   width cap and depression features inserted in the wall's sequence
+//!   (module `influence`);
 //! - `WebFaceMill` makes a web's top-down layers (see [`web`]).
 //!
 //! Each owner's features form one chain of `Before` constraints, so a
