@@ -107,6 +107,9 @@ enum Command {
         /// Also write the LinuxCNC tool table the program needs.
         #[arg(long)]
         tool_table: Option<PathBuf>,
+        /// Also write the setup sheet (one self-contained HTML page).
+        #[arg(long)]
+        sheet: Option<PathBuf>,
     },
     /// Recognise stiffness features and their connections (stages 2-3).
     Recognize {
@@ -226,6 +229,7 @@ fn run(command: Command) -> Result<(), CliError> {
             gcode,
             post,
             tool_table,
+            sheet,
         } => plan(
             part,
             out,
@@ -234,6 +238,7 @@ fn run(command: Command) -> Result<(), CliError> {
             gcode
                 .as_deref()
                 .map(|g| (g, post.as_str(), tool_table.as_deref())),
+            sheet.as_deref(),
         ),
         Command::Recognize {
             part,
@@ -537,6 +542,7 @@ fn plan(
     setup_opts: &SetupOpts,
     json: bool,
     gcode: Option<(&Path, &str, Option<&Path>)>,
+    sheet: Option<&Path>,
 ) -> Result<(), CliError> {
     let source = part.unwrap_or_else(|| format!("builtin:{}", thinplan_import::DEFAULT_SAMPLE));
     let knowledge = load_knowledge(setup_opts.knowledge.as_deref())?;
@@ -588,8 +594,20 @@ fn plan(
             }
         })?;
     }
+    if let Some(path) = sheet {
+        thinplan_sheet::write_sheet(path, &plan, &knowledge, &brep, &warnings).map_err(
+            |message| CliError {
+                code: exit::OUTPUT,
+                kind: "output",
+                message,
+            },
+        )?;
+    }
     if json {
-        let v = thinplan_pipeline::report::plan_json(&plan, &brep, &plan_file, &warnings);
+        let mut v = thinplan_pipeline::report::plan_json(&plan, &brep, &plan_file, &warnings);
+        v["collisions"] = thinplan_collision::collisions_json(&thinplan_collision::check_holders(
+            &plan, &knowledge, &brep,
+        ));
         println!("{v}");
     } else {
         println!(

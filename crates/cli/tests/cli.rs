@@ -506,3 +506,26 @@ fn every_sample_program_never_gouges() {
         "wing_rib",
     ]);
 }
+
+#[test]
+fn plan_writes_the_setup_sheet_and_reports_collisions() {
+    let d = tmp("sheet");
+    let sheet = d.join("tall_rib.html");
+    let (code, v) = run_json(
+        thinplan()
+            .args(["plan", "builtin:tall_rib", "--json", "--out"])
+            .arg(d.join("p.json"))
+            .arg("--sheet")
+            .arg(&sheet),
+    );
+    assert_eq!(code, 0, "{v}");
+    assert!(v["collisions"].is_array(), "{v}");
+    let html = std::fs::read_to_string(&sheet).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") || html.starts_with("<!doctype html>"));
+    for op in v["operation_order"].as_array().unwrap() {
+        assert!(
+            html.contains(op.as_str().unwrap()),
+            "{op} missing from the sheet"
+        );
+    }
+}
