@@ -271,8 +271,10 @@ impl ThinplanApp {
                     self.state.apply_setup(&req);
                 }
             });
+        // Kept open while the knowledge has errors: they must be seen.
+        let errors = !self.state.knowledge_status.errors.is_empty();
         egui::CollapsingHeader::new("Knowledge")
-            .default_open(!self.state.knowledge_status.errors.is_empty())
+            .open(errors.then_some(true))
             .show(ui, |ui| {
                 let origin = self
                     .state

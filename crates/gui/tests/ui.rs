@@ -218,3 +218,49 @@ fn snapshots_of_the_main_views() {
     results.add(h.try_snapshot_options("gui_simulation", &snapshot_options()));
     results.unwrap();
 }
+
+#[test]
+fn knowledge_errors_are_listed_with_their_place_and_nothing_is_lost() {
+    let mut h = harness("builtin:tall_rib");
+    let dir = std::env::temp_dir().join(format!("thinplan-gui-knowledge-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // A copy of the built-in knowledge with one broken file.
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../knowledge");
+    copy_dir(&src, &dir);
+    std::fs::write(
+        dir.join("sizing.ron"),
+        "(\n  allowed_deflection: oops,\n)\n",
+    )
+    .unwrap();
+    let before = plan_bytes(&h);
+    let st = &mut h.state_mut().state;
+    assert!(!st.load_knowledge(Some(&dir)));
+    assert!(
+        st.knowledge_status
+            .errors
+            .iter()
+            .any(|e| e.contains("sizing.ron:2:")),
+        "{:?}",
+        st.knowledge_status.errors
+    );
+    h.run_steps(2);
+    assert!(h.query_all_by_label_contains("sizing.ron:2:").count() >= 1);
+    assert!(plan_bytes(&h) == before, "a failed load changes nothing");
+    // The built-in copy loads again.
+    assert!(h.state_mut().state.load_knowledge(None));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            std::fs::create_dir_all(&target).unwrap();
+            copy_dir(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), &target).unwrap();
+        }
+    }
+}
