@@ -140,6 +140,20 @@ fn main() {
         let _ = h.ctx.tessellate(shapes, 1.0);
         steps.push(t.elapsed());
     }
+    // The same with the network view on the stiffness level (a few nodes):
+    // what the 10 000-node network drawing costs.
+    h.state_mut().state.select(Some(Entity::Part));
+    h.state_mut().network.level = thinplan_gui::network::Level::Stiffness;
+    h.step();
+    let mut small = Vec::new();
+    for _ in 0..n {
+        h.state_mut().viewport.camera.yaw += 0.02;
+        let t = Instant::now();
+        h.step();
+        let shapes = h.output().shapes.clone();
+        let _ = h.ctx.tessellate(shapes, 1.0);
+        small.push(t.elapsed());
+    }
     let mut renders = Vec::new();
     for _ in 0..5 {
         h.state_mut().viewport.camera.yaw += 0.02;
@@ -163,6 +177,8 @@ fn main() {
     );
     let (m, w) = stats(&steps);
     println!("steady frame CPU (app + egui layout/tessellation), {n} frames: mean {m:.2} ms, worst {w:.2} ms");
+    let (m, w) = stats(&small);
+    println!("  of which without the 10 000-node network drawing: mean {m:.2} ms, worst {w:.2} ms");
     let (m, w) = stats(&renders);
     println!("full software-rendered frame (llvmpipe, GPU work on the CPU): mean {m:.1} ms, worst {w:.1} ms");
 }
