@@ -529,3 +529,64 @@ fn plan_writes_the_setup_sheet_and_reports_collisions() {
         );
     }
 }
+
+/// The programs thinplan writes read cleanly in LinuxCNC's own interpreter
+/// (`rs274`, tools/peers/linuxcnc) and its canonical moves have the lengths
+/// our independent stock-simulation reader finds, within 0.1 %. Skipped
+/// with a note when the peer is not installed.
+#[test]
+fn programs_read_cleanly_in_linuxcnc_rs274() {
+    let root = std::env::var_os("THINPLAN_LINUXCNC")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(std::env::var_os("HOME").unwrap_or_default())
+                .join(".cache/thinplan-linuxcnc")
+        });
+    if !root.join("usr/bin/rs274").is_file() {
+        eprintln!("skip: rs274 not installed (bash tools/peers/linuxcnc/setup.sh)");
+        return;
+    }
+    for name in ["tall_rib", "wing_rib"] {
+        let d = tmp(&format!("rs274-{name}"));
+        let (ngc, tbl) = (d.join("p.ngc"), d.join("p.tbl"));
+        let out = thinplan()
+            .args(["plan", &format!("builtin:{name}"), "--out"])
+            .arg(d.join("p.json"))
+            .arg("--gcode")
+            .arg(&ngc)
+            .arg("--tool-table")
+            .arg(&tbl)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{name}: {out:?}");
+        let check = Command::new("python3")
+            .arg(repo().join("tools/peers/linuxcnc/rs274_check.py"))
+            .arg(&ngc)
+            .arg(&tbl)
+            .args(["--skip", "2", "--root"])
+            .arg(&root)
+            .output()
+            .unwrap();
+        assert!(check.status.success(), "{name}: rs274: {check:?}");
+        let peer: Value = serde_json::from_slice(&check.stdout).unwrap();
+        assert_eq!(peer["error"], "", "{name}: {peer}");
+        let (_, sim) = run_json(
+            thinplan()
+                .args(["simulate", &format!("builtin:{name}")])
+                .arg(&ngc)
+                .arg("--tool-table")
+                .arg(&tbl)
+                .arg("--json"),
+        );
+        for key in ["feed_length_mm", "rapid_length_mm"] {
+            let (a, b) = (
+                peer[key].as_f64().unwrap(),
+                sim["program"][key].as_f64().unwrap(),
+            );
+            assert!(
+                (a - b).abs() <= 1e-3 * a.max(1.0),
+                "{name}: {key} rs274 {a} vs ours {b}"
+            );
+        }
+    }
+}
