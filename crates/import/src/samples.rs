@@ -11,6 +11,7 @@ macro_rules! samples {
 }
 
 samples!(
+    "chamfered_rib",
     "crossing_ribs",
     "flange_cutouts",
     "flange_web_slot",

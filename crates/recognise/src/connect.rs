@@ -20,8 +20,12 @@
 //!   - parallel touching walls (a step in a web): the lower one is the base.
 //! - **wall–depression**: the depression is a leaf of every wall it touches
 //!   (`connect.depression_in_wall`): a hole through a rib has the rib as base.
-//!   Details (chamfers, fillets) shape the features they blend and get no
-//!   connection; depressions never are bases (thesis §5.4.1).
+//!   Depressions never are bases (thesis §5.4.1).
+//! - **wall–detail**: a chamfer or fillet across a standing wall's corner
+//!   (recognition gave it a wedge in the wall's frame) is a leaf of that
+//!   wall (`connect.detail_on_wall`, figure 4.10: the detail is machined in
+//!   the wall's sequence). Other details (corner blends between walls) shape
+//!   the features they blend and get no connection.
 //!
 //! Output sorted by (base, leaf, kind), one connection per pair.
 
@@ -78,6 +82,8 @@ pub fn connect(
             }
             (StiffnessKind::Wall, d) if is_depression(d) => Some(leaf_in(fi, fj)),
             (d, StiffnessKind::Wall) if is_depression(d) => Some(leaf_in(fj, fi)),
+            (StiffnessKind::Wall, _) if on_wall(fi, fj, tol) => Some(detail_on(fi, fj)),
+            (_, StiffnessKind::Wall) if on_wall(fj, fi, tol) => Some(detail_on(fj, fi)),
             _ => None,
         };
         if let Some(c) = conn {
@@ -95,6 +101,31 @@ fn is_depression(k: StiffnessKind) -> bool {
         k,
         StiffnessKind::Wall | StiffnessKind::Chamfer | StiffnessKind::Fillet
     )
+}
+
+/// A detail (chamfer, fillet) whose wedge lies in `wall`'s slab: recognition
+/// gives a detail across a standing wall's corner the wall's frame.
+fn on_wall(wall: &StiffnessFeature, detail: &StiffnessFeature, tol: f64) -> bool {
+    if !matches!(detail.kind, StiffnessKind::Chamfer | StiffnessKind::Fillet) {
+        return false;
+    }
+    let (Some(w), Some(d)) = (wall.shape.as_ref(), detail.shape.as_ref()) else {
+        return false;
+    };
+    let n = w.frame.z.normalize_or_zero();
+    n.dot(d.frame.z.normalize_or_zero()) > 1.0 - 1e-9
+        && (d.frame.origin - w.frame.origin).dot(n).abs() <= tol
+        && (d.z_min - w.z_min).abs() <= tol
+        && (d.z_max - w.z_max).abs() <= tol
+}
+
+fn detail_on(wall: &StiffnessFeature, detail: &StiffnessFeature) -> Connection {
+    Connection {
+        base: wall.id,
+        leaf: detail.id,
+        kind: ConnectionKind::BaseLeaf,
+        provenance: Provenance::new(ProvenanceSource::Recogniser, "connect.detail_on_wall"),
+    }
 }
 
 fn leaf_in(wall: &StiffnessFeature, dep: &StiffnessFeature) -> Connection {

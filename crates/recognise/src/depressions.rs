@@ -45,6 +45,20 @@
 //!    (concave or convex, tangent to its neighbours, radius at most the
 //!    knowledge's limit) that no depression took is a fillet. Details are
 //!    read only on faces no wall lists.
+//! 6. **Details on a wall's corner** (figure 4.10). A planar face across a
+//!    standing wall (next to both its sides, inside its slab, all edges
+//!    convex) joining two faces square to the wall (its top and end) and
+//!    inclined to both is a chamfer of any length
+//!    (`recognise.chamfer.wall_corner`), as long as each leg cuts at most
+//!    `max_chamfer_width_ratio` of the face it shortens (a roof of two
+//!    inclined tops is no chamfer). Such a chamfer, and a convex fillet
+//!    (a cylinder along the wall normal) across a wall's corner, get as
+//!    shape the wedge they remove: in the wall's frame, the corner where
+//!    the two joined faces' planes meet and the detail's two ends (the
+//!    fillet's side an arc), swept over the wall's prism. Values: `leg_a`,
+//!    `leg_b` (corner to each end), `corner_x`, `corner_y` (the corner in
+//!    the wall's frame). `connect` makes the detail a leaf of that wall.
+//!    Concave blends (between walls) add material and get no shape.
 //!
 //! Cost: face facts, sets and readings are linear in the faces (sets are
 //! read in time quadratic in their own size); the envelope test computes
@@ -128,6 +142,7 @@ pub fn find_depressions(
         k,
         wall_face: &wall_face,
         wall_end: &wall_end,
+        walls,
         sin_tol: k.angle_tolerance_deg.to_radians().sin(),
         cos_tol: k.angle_tolerance_deg.to_radians().cos(),
     };
@@ -147,6 +162,8 @@ struct Reader<'a> {
     /// Faces walls do not list that are their ends or tops (planar, square
     /// to the wall, inside its slab, next to its sides).
     wall_end: &'a [bool],
+    /// The walls found before (details on their corners get a shape).
+    walls: &'a [StiffnessFeature],
     /// Sine of the angle tolerance: `|a·b|` below it is perpendicular,
     /// above `1 −` it parallel.
     sin_tol: f64,
@@ -303,7 +320,14 @@ impl Reader<'_> {
             if *u || !free(f) {
                 continue;
             }
-            if let Some(r) = self.read_chamfer(f).or_else(|| self.read_fillet(f)) {
+            let read = self
+                .read_corner_chamfer(f)
+                .or_else(|| self.read_chamfer(f))
+                .or_else(|| self.read_fillet(f));
+            if let Some(mut r) = read {
+                if r.shape.is_none() {
+                    self.shape_on_wall_corner(f, &mut r);
+                }
                 *u = true;
                 readings.push(r);
             }
@@ -1045,6 +1069,276 @@ impl Reader<'_> {
             length: 0.0,
             diameter: None,
         })
+    }
+
+    /// Figure 4.10: a planar face cut across a standing wall's corner (next
+    /// to both sides, all edges convex), inclined to the two faces it joins
+    /// (the wall's top and end): a chamfer on the wall, whatever its length
+    /// (a large chamfer is still a detail, thesis §4.1.3). Each leg is at
+    /// most `max_chamfer_width_ratio` of the face it cuts short, so a roof
+    /// of two inclined tops is no chamfer.
+    fn read_corner_chamfer(&self, f: FaceId) -> Option<Reading> {
+        let fx = &self.facts[f];
+        let n = fx.geom.normal()?;
+        if fx
+            .neighbours
+            .iter()
+            .any(|nb| !matches!(nb.convexity, Convexity::Convex))
+        {
+            return None;
+        }
+        let c = self.wall_corner(f)?;
+        let lo = self.k.min_chamfer_incline_deg.to_radians();
+        let inclined = c.joins.iter().all(|&g| {
+            self.facts[g].geom.normal().is_some_and(|m| {
+                let ang = n.dot(m).clamp(-1.0, 1.0).acos();
+                ang > lo && ang < std::f64::consts::FRAC_PI_2 - lo
+            })
+        });
+        // The corner it replaces lies outside the face (a convex cut).
+        let n2 = DVec2::new(n.dot(c.fx), n.dot(c.fy));
+        if !inclined || !c.legs_ok(self.k) || n2.dot(c.corner - c.ends[0]) <= 0.0 {
+            return None;
+        }
+        let mut r = Reading {
+            kind: DepressionKind::Chamfer,
+            rule: "recognise.chamfer.wall_corner",
+            axis: n,
+            faces: vec![f],
+            values: Vec::new(),
+            shape: None,
+            height: c.t,
+            length: c.ends[0].distance(c.ends[1]),
+            diameter: None,
+        };
+        r.values = vec![("width", c.t), ("length", r.length)];
+        r.shape = Some(c.wedge(None));
+        r.values.extend(c.values());
+        Some(r)
+    }
+
+    /// Gives a detail read on face `f` its wedge when `f` lies across a
+    /// standing wall's corner: a chamfer (planar) or a convex fillet (a
+    /// cylinder along the wall normal); concave blends between walls add
+    /// material and have none.
+    fn shape_on_wall_corner(&self, f: FaceId, r: &mut Reading) {
+        let arc = match self.facts[f].geom {
+            FaceGeom::Plane { .. } => None,
+            FaceGeom::Cylinder {
+                axis,
+                origin,
+                radius,
+                hole: false,
+            } => Some((axis, origin, radius)),
+            _ => return,
+        };
+        let Some(c) = self.wall_corner(f) else { return };
+        if !c.legs_ok(self.k) {
+            return;
+        }
+        let arc = match arc {
+            None => None,
+            Some((axis, origin, radius)) => {
+                if axis.dot(c.n).abs() < self.cos_tol {
+                    return;
+                }
+                let q = c.to2(origin);
+                // Convex: the corner lies outside the cylinder.
+                if c.corner.distance(q) <= radius {
+                    return;
+                }
+                Some(q)
+            }
+        };
+        r.shape = Some(c.wedge(arc));
+        r.values.extend(c.values());
+    }
+
+    /// The standing wall whose corner face `f` lies across: next to both of
+    /// its sides, inside its slab, joining exactly two other planar faces
+    /// square to the wall (its top and end).
+    fn wall_corner(&self, f: FaceId) -> Option<WallCorner> {
+        let fx = &self.facts[f];
+        let tol = self.k.distance_tolerance.max(1e-6) * 10.0;
+        for w in self
+            .walls
+            .iter()
+            .filter(|w| w.kind == StiffnessKind::Wall && w.role != Some(WallRole::Web))
+        {
+            let (Some(t), Some(shape)) = (w.thickness, w.shape.as_ref()) else {
+                continue;
+            };
+            let n = shape.frame.z.normalize_or_zero();
+            if n.dot(w.axis.normalize_or_zero()).abs() < self.cos_tol {
+                continue; // a curved wall
+            }
+            let mid = shape.frame.origin + n * (0.5 * (shape.z_min + shape.z_max));
+            let mut sides = (false, false);
+            let mut joins: Vec<FaceId> = Vec::new();
+            let mut ok = true;
+            for nb in &fx.neighbours {
+                if w.faces.contains(&nb.face) {
+                    let s = self.facts[nb.face].geom.normal().map_or(0.0, |m| m.dot(n));
+                    if s > 0.0 {
+                        sides.0 = true;
+                    } else if s < 0.0 {
+                        sides.1 = true;
+                    }
+                } else if !joins.contains(&nb.face) {
+                    let square = self.facts[nb.face]
+                        .geom
+                        .normal()
+                        .is_some_and(|m| self.perpendicular(m, n));
+                    ok &= square;
+                    joins.push(nb.face);
+                }
+            }
+            if !(ok && sides.0 && sides.1 && joins.len() == 2)
+                || fx
+                    .points
+                    .iter()
+                    .any(|p| (*p - mid).dot(n).abs() > 0.5 * t + tol)
+            {
+                continue;
+            }
+            let fxd = shape.frame.x.normalize_or_zero();
+            let mut c = WallCorner {
+                origin: shape.frame.origin,
+                fx: fxd,
+                fy: n.cross(fxd),
+                n,
+                z: (shape.z_min, shape.z_max),
+                t,
+                joins: [joins[0], joins[1]],
+                ends: [DVec2::ZERO; 2],
+                corner: DVec2::ZERO,
+                legs: [0.0; 2],
+                rest: [0.0; 2],
+            };
+            // Each joined face: where the detail meets it (the shared edge,
+            // which runs across the wall) and its trace in the wall plane.
+            let mut dirs = [DVec2::ZERO; 2];
+            let joins = c.joins;
+            for (k, &g) in joins.iter().enumerate() {
+                let nb = fx.neighbours.iter().find(|nb| nb.face == g)?;
+                let e = &self.brep.edges[nb.edge];
+                c.ends[k] = c.to2(self.brep.vertices[e.start].point);
+                let m = self.facts[g].geom.normal()?;
+                let d = n.cross(m);
+                dirs[k] = DVec2::new(d.dot(c.fx), d.dot(c.fy)).try_normalize()?;
+            }
+            let den = dirs[0].perp_dot(dirs[1]);
+            if den.abs() < self.sin_tol {
+                continue; // parallel top and end: no corner
+            }
+            let s = (c.ends[1] - c.ends[0]).perp_dot(dirs[1]) / den;
+            c.corner = c.ends[0] + dirs[0] * s;
+            for (k, dir) in dirs.iter().enumerate() {
+                c.legs[k] = c.corner.distance(c.ends[k]);
+                let (lo, hi) = self.facts[c.joins[k]]
+                    .points
+                    .iter()
+                    .map(|p| c.to2(*p).dot(*dir))
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                        (lo.min(v), hi.max(v))
+                    });
+                c.rest[k] = (hi - lo).max(0.0);
+            }
+            if c.legs.iter().any(|l| *l <= tol) {
+                continue;
+            }
+            return Some(c);
+        }
+        None
+    }
+}
+
+/// A detail across a standing wall's corner, in the wall's shape frame
+/// (x, y in the wall plane, z its normal).
+struct WallCorner {
+    origin: DVec3,
+    fx: DVec3,
+    fy: DVec3,
+    n: DVec3,
+    /// The wall prism's extent along its normal (the wedge's sweep).
+    z: (f64, f64),
+    t: f64,
+    /// The two faces the detail joins (the wall's top and end).
+    joins: [FaceId; 2],
+    /// Where the detail meets each joined face (2D).
+    ends: [DVec2; 2],
+    /// The corner the detail replaces: where the joined faces' planes meet.
+    corner: DVec2,
+    /// Corner to each end.
+    legs: [f64; 2],
+    /// What is left of each joined face along its trace.
+    rest: [f64; 2],
+}
+
+impl WallCorner {
+    fn to2(&self, p: DVec3) -> DVec2 {
+        let v = p - self.origin;
+        DVec2::new(v.dot(self.fx), v.dot(self.fy))
+    }
+
+    /// A detail cuts a corner short, not a face away: each leg at most
+    /// `max_chamfer_width_ratio` of the face's length before the cut.
+    fn legs_ok(&self, k: &DepressionRecognition) -> bool {
+        (0..2).all(|i| self.legs[i] <= k.max_chamfer_width_ratio * (self.legs[i] + self.rest[i]))
+    }
+
+    fn values(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("leg_a", self.legs[0]),
+            ("leg_b", self.legs[1]),
+            ("corner_x", self.corner.x),
+            ("corner_y", self.corner.y),
+        ]
+    }
+
+    /// The wedge the detail removes: the corner and the detail's two ends
+    /// (the detail's side an arc about `centre` for a fillet), counter-
+    /// clockwise, swept over the wall's thickness.
+    fn wedge(&self, centre: Option<DVec2>) -> Prism {
+        let (a, c, b) = (self.ends[0], self.corner, self.ends[1]);
+        let (a, b) = if (c - a).perp_dot(b - a) > 0.0 {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        // Loop a → c → b, then back to a along the detail (b's bulge).
+        let bulge = centre.map_or(0.0, |q| {
+            let (ra, rb) = (a - q, b - q);
+            let sweep = ra.angle_to(rb).abs();
+            let d = a - b;
+            let right = DVec2::new(d.y, -d.x);
+            let s = if right.dot(c - (a + b) * 0.5) > 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            s * (sweep / 4.0).tan()
+        });
+        let v = |p: DVec2, bulge: f64| ProfileVertex {
+            x: p.x,
+            y: p.y,
+            bulge,
+        };
+        Prism {
+            frame: PrismFrame {
+                origin: self.origin,
+                x: self.fx,
+                z: self.n,
+            },
+            region: Region {
+                outer: ProfileLoop {
+                    vertices: vec![v(a, 0.0), v(c, 0.0), v(b, bulge)],
+                },
+                holes: Vec::new(),
+            },
+            z_min: self.z.0,
+            z_max: self.z.1,
+        }
     }
 }
 

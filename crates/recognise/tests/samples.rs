@@ -316,7 +316,7 @@ fn walls_match_labels() {
             Err(e) => failures.push(e),
         }
     }
-    assert_eq!(n, 8, "eight sample parts");
+    assert_eq!(n, 9, "nine sample parts");
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
