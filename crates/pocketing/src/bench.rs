@@ -7,7 +7,10 @@ use std::path::PathBuf;
 
 use crate::geom::sample_pline;
 use crate::timing::{time_path, MachineLimits};
-use crate::{curvilinear_path, offset_path, Pocket, PocketError, PocketParams};
+use crate::{
+    curvilinear_path, offset_path, offset_path_gap_matched, offset_path_sharp, Pocket, PocketError,
+    PocketParams,
+};
 
 /// A convex polygon (counter-clockwise vertices) with every corner rounded by radius `rc`.
 pub fn rounded_polygon(vertices: &[DVec2], rc: f64) -> Polyline<f64> {
@@ -345,6 +348,25 @@ pub struct BenchRow {
     pub adaptive: Option<PathStats>,
     /// Time saving of curvilinear vs offset, % of the offset time.
     pub saving_pct: f64,
+    /// Conventional "rectilinear" baseline: the same offset rings with convex arcs replaced by
+    /// chords (sharp corners, a stop at each), links as in `offset` ([`offset_path_sharp`]).
+    pub offset_sharp: PathStats,
+    /// Time saving of curvilinear vs `offset_sharp`, %.
+    pub saving_vs_sharp_pct: f64,
+    /// Offset rings held to the spiral's maximum engagement: ring stepover reduced until the
+    /// measured ring gap ≤ `stepover_mm` ([`offset_path_gap_matched`]).
+    pub offset_gap_matched: PathStats,
+    /// The ring stepover that needed (mm).
+    pub gap_matched_ring_step_mm: f64,
+    /// Time saving of curvilinear vs `offset_gap_matched`, %.
+    pub saving_vs_gap_matched_pct: f64,
+    /// Roughing orbits of the spiral (turns about the centre, without the finishing pass) and
+    /// offset rings (without the finishing ring).
+    pub curvilinear_turns: usize,
+    pub offset_rings: usize,
+    /// Lower bound on the spiral's turns for any orbit spacing with gap ≤ stepover and the
+    /// same first turn ([`crate::PocketPath::turns_lower_bound`]); null for a fallback.
+    pub curvilinear_turns_bound: Option<usize>,
     /// Schedule time / TOPP-RA time (to be filled by the TOPP-RA peer).
     pub toppra_ratio: Option<f64>,
 }
@@ -375,8 +397,17 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
             params.distance_blend = cfg.distance_blend;
             let off = offset_path(&bp.pocket, &params)?;
             let cur = curvilinear_path(&bp.pocket, &params)?;
+            let sharp = offset_path_sharp(&bp.pocket, &params)?;
+            let (matched, matched_step) = offset_path_gap_matched(&bp.pocket, &params)?;
             let t_off = time_path(&off.points, feed, &cfg.limits);
             let t_cur = time_path(&cur.points, feed, &cfg.limits);
+            let t_sharp = time_path(&sharp.points, feed, &cfg.limits);
+            let t_matched = time_path(&matched.points, feed, &cfg.limits);
+            let stats = |t: &crate::timing::Schedule, p: &crate::PocketPath| PathStats {
+                length_mm: t.length,
+                time_s: t.total_time,
+                max_gap_mm: Some(p.max_gap),
+            };
             let adaptive = cfg.adaptive.as_ref().and_then(|peer| {
                 peer.run(&bp.pocket, &params).ok().map(|pts| {
                     let t = time_path(&pts, feed, &cfg.limits);
@@ -418,6 +449,14 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                 },
                 adaptive,
                 saving_pct: 100.0 * (1.0 - t_cur.total_time / t_off.total_time),
+                offset_sharp: stats(&t_sharp, &sharp),
+                saving_vs_sharp_pct: 100.0 * (1.0 - t_cur.total_time / t_sharp.total_time),
+                offset_gap_matched: stats(&t_matched, &matched),
+                gap_matched_ring_step_mm: matched_step,
+                saving_vs_gap_matched_pct: 100.0 * (1.0 - t_cur.total_time / t_matched.total_time),
+                curvilinear_turns: cur.roughing_turns(),
+                offset_rings: off.contours.len().saturating_sub(1),
+                curvilinear_turns_bound: cur.turns_lower_bound(params.stepover),
                 toppra_ratio: None,
             });
         }
@@ -439,25 +478,39 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
     Ok(rows)
 }
 
-/// The rows as a fixed-width text table.
+/// The rows as a fixed-width text table. `save %` columns: curvilinear time saving over the
+/// arc offset baseline (`offset`), the sharp-cornered one (`sharp`) and the gap-matched one
+/// (`gapm`, ring stepover `s'`); `turns/bd/rings`: spiral turns, their lower bound, offset rings.
 pub fn format_table(rows: &[BenchRow]) -> String {
     use std::fmt::Write;
     let mut s = String::new();
-    let _ =
-        writeln!(
+    let _ = writeln!(
         s,
-        "{:<17} {:>5} {:>7} {:>6} {:>6} | {:>9} {:>7} | {:>9} {:>7} {:>15} | {:>9} {:>7} | {:>7} | {:>7}",
+        "{:<17} {:>5} {:>6} {:>5} {:>5} | {:>6} {:>6} | {:>7} {:>6} {:>11} | {:>6} {:>6} | {:>6} | {:>5} {:>7} {:>6} | {:>6} {:>6} {:>6} | {:>10} | {:>6}",
         "pocket", "L/D", "L mm", "tool", "step", "off mm", "off s", "curv mm", "curv s", "method",
-        "adapt mm", "adapt s", "save %", "TOPP-RA"
+        "adp mm", "adp s", "shrp s", "s'", "gapm mm", "gapm s", "save%", "sharp", "gapm",
+        "turns/bd/r", "TOPP-RA"
     );
     for r in rows {
         let (am, at) = match &r.adaptive {
             Some(a) => (format!("{:.0}", a.length_mm), format!("{:.2}", a.time_s)),
             None => ("-".into(), "-".into()),
         };
+        let method = match r.curvilinear.method.as_str() {
+            "offset-fallback" => "fallback",
+            m => m,
+        };
+        let turns = format!(
+            "{}/{}/{}",
+            r.curvilinear_turns,
+            r.curvilinear_turns_bound
+                .map(|b| b.to_string())
+                .unwrap_or_else(|| "-".into()),
+            r.offset_rings
+        );
         let _ = writeln!(
             s,
-            "{:<17} {:>5.1} {:>7.1} {:>6.2} {:>6.2} | {:>9.0} {:>7.2} | {:>9.0} {:>7.2} {:>15} | {:>9} {:>7} | {:>7.1} | {:>7}",
+            "{:<17} {:>5.1} {:>6.1} {:>5.2} {:>5.2} | {:>6.0} {:>6.2} | {:>7.0} {:>6.2} {:>11} | {:>6} {:>6} | {:>6.2} | {:>5.2} {:>7.0} {:>6.2} | {:>6.1} {:>6.1} {:>6.1} | {:>10} | {:>6}",
             r.pocket,
             r.l_over_d,
             r.size_mm,
@@ -467,10 +520,17 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.offset.time_s,
             r.curvilinear.length_mm,
             r.curvilinear.time_s,
-            r.curvilinear.method,
+            method,
             am,
             at,
+            r.offset_sharp.time_s,
+            r.gap_matched_ring_step_mm,
+            r.offset_gap_matched.length_mm,
+            r.offset_gap_matched.time_s,
             r.saving_pct,
+            r.saving_vs_sharp_pct,
+            r.saving_vs_gap_matched_pct,
+            turns,
             r.toppra_ratio
                 .map(|x| format!("{x:.4}"))
                 .unwrap_or_else(|| "-".into())

@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 
 pub use bench::{bench_pockets, BenchConfig, BenchRow};
 pub use fem::Field;
-pub use offset::offset_path;
+pub use offset::{offset_path, offset_path_gap_matched, offset_path_sharp};
 pub use profile::PocketProfile;
 pub use spiral::curvilinear_path;
 pub use svg::pocket_svg;
@@ -233,6 +233,50 @@ impl PocketPath {
     /// Path length (mm).
     pub fn length(&self) -> f64 {
         self.points.windows(2).map(|w| w[0].distance(w[1])).sum()
+    }
+
+    /// Number of turns of the roughing part (before `finish_start`): full windings about the
+    /// centre for a spiral (the last, full orbit on the roughing boundary included), rings for
+    /// an offset path.
+    pub fn roughing_turns(&self) -> usize {
+        match self.center {
+            Some(c) => {
+                let mut acc = 0.0;
+                for w in self.points[..self.finish_start.min(self.points.len())].windows(2) {
+                    let (a, b) = (w[0] - c, w[1] - c);
+                    if a.length_squared() > 1e-18 && b.length_squared() > 1e-18 {
+                        acc += a.perp_dot(b).atan2(a.dot(b));
+                    }
+                }
+                (acc / std::f64::consts::TAU - 1e-3).ceil().max(0.0) as usize
+            }
+            None => self.contours.len().saturating_sub(1),
+        }
+    }
+
+    /// For a spiral: a lower bound on [`Self::roughing_turns`] for any spiral about this centre
+    /// with the same first turn whose gap between successive turns is ≤ `stepover`:
+    /// ⌈(R_max − ρ₁) / stepover⌉ + 1, R_max the largest distance from the centre to the roughing
+    /// boundary, ρ₁ the largest of the first turn. (Each point of a turn is within the gap of
+    /// the previous turn, so a turn reaches at most one stepover farther from the centre than
+    /// the one before; + 1 for the first turn.) `None` for offset paths.
+    pub fn turns_lower_bound(&self, stepover: f64) -> Option<usize> {
+        let c = self.center?;
+        let rough = self.contours.last()?;
+        let rmax = rough.iter().map(|p| p.distance(c)).fold(0.0, f64::max);
+        let mut acc = 0.0;
+        let mut rho1: f64 = 0.0;
+        for w in self.points[..self.finish_start.min(self.points.len())].windows(2) {
+            let (a, b) = (w[0] - c, w[1] - c);
+            if a.length_squared() > 1e-18 && b.length_squared() > 1e-18 {
+                acc += a.perp_dot(b).atan2(a.dot(b));
+            }
+            if acc > std::f64::consts::TAU {
+                break;
+            }
+            rho1 = rho1.max(b.length());
+        }
+        Some(((rmax - rho1) / stepover - 1e-9).ceil().max(0.0) as usize + 1)
     }
 
     /// Largest distance between consecutive points.

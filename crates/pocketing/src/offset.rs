@@ -88,10 +88,81 @@ pub(crate) fn level_gap(a: &[Vec<DVec2>], b: &[Vec<DVec2>]) -> f64 {
 /// Each ring is traversed in its cavalier orientation: counter-clockwise for the outer wall,
 /// clockwise around islands — down milling with an M3 spindle in both cases.
 pub fn offset_path(pocket: &Pocket, params: &PocketParams) -> Result<PocketPath, PocketError> {
+    offset_path_styled(pocket, params, params.stepover, false)
+}
+
+/// The conventional "rectilinear" baseline Bieterman compared against (`shared/seeds/001_…`:
+/// offsets that "inherit any corners", the tool decelerating "to rest, or near rest" at each):
+/// the same rings and links as [`offset_path`], but every convex corner fillet of a roughing
+/// ring (an arc of radius below the tool diameter on a ring with straight sides) is replaced by
+/// its chord, so the rings are
+/// polylines with sharp corners (the chord lies inside the arc: no gouge). Larger arcs (a
+/// circular pocket) and concave arcs (around islands) are kept. The finishing pass keeps the
+/// wall's arcs.
+pub fn offset_path_sharp(
+    pocket: &Pocket,
+    params: &PocketParams,
+) -> Result<PocketPath, PocketError> {
+    offset_path_styled(pocket, params, params.stepover, true)
+}
+
+/// Parallel offsets held to the same maximum engagement as the curvilinear spiral: the ring
+/// stepover s' is reduced from s in steps of 2 % until the measured gap between successive
+/// rings (symmetric Hausdorff, corners included) is ≤ s. Returns the path and s'.
+pub fn offset_path_gap_matched(
+    pocket: &Pocket,
+    params: &PocketParams,
+) -> Result<(PocketPath, f64), PocketError> {
+    let s = params.stepover;
+    let mut last = None;
+    for j in 0..=40 {
+        let sj = s * (1.0 - 0.02 * j as f64);
+        let p = offset_path_styled(pocket, params, sj, false)?;
+        if p.max_gap <= s + 1e-9 {
+            return Ok((p, sj));
+        }
+        last = Some((p, sj));
+    }
+    // not reached for the bench family (worst corner 60°: s' = s/2); return the finest tried
+    Ok(last.expect("at least one attempt"))
+}
+
+/// Replace convex corner fillets (arcs turning with the loop, radius below `max_radius`, on a
+/// loop that has straight sides) by their chords. Larger arcs, wide blends and all-arc loops (a
+/// circular pocket's rings) are geometry, not corners, and are kept.
+fn flatten_corner_arcs(pl: &Polyline<f64>, max_radius: f64) -> Polyline<f64> {
+    use cavalier_contours::polyline::{
+        seg_arc_radius_and_center, PlineCreation, PlineSourceMut, PlineVertex,
+    };
+    let sense = pl.area().signum();
+    let n = pl.vertex_count();
+    if pl.iter_vertexes().all(|v| v.bulge.abs() > 1e-12) {
+        return pl.clone(); // no straight side (a circle): no fillet to sharpen
+    }
+    let mut out = Polyline::with_capacity(n, pl.is_closed());
+    for i in 0..n {
+        let v = pl.at(i);
+        let corner = v.bulge * sense > 0.0
+            && seg_arc_radius_and_center(v, pl.at((i + 1) % n)).0 < max_radius;
+        out.add_vertex(PlineVertex::new(
+            v.x,
+            v.y,
+            if corner { 0.0 } else { v.bulge },
+        ));
+    }
+    out
+}
+
+fn offset_path_styled(
+    pocket: &Pocket,
+    params: &PocketParams,
+    ring_step: f64,
+    sharp: bool,
+) -> Result<PocketPath, PocketError> {
     params.validate()?;
     pocket.validate()?;
     let r = params.tool_diameter / 2.0;
-    let s = params.stepover;
+    let s = ring_step;
     let f = params.finish_stepover;
     let step = params.sample_step();
     let finish = offset_loops(pocket, r);
@@ -99,11 +170,22 @@ pub fn offset_path(pocket: &Pocket, params: &PocketParams) -> Result<PocketPath,
         return Err(PocketError::ToolDoesNotFit);
     }
     let mut levels: Vec<Vec<Vec<DVec2>>> = vec![sample_level(&finish, step)];
+    let rough = |l: Vec<Polyline<f64>>| -> Vec<Vec<DVec2>> {
+        if sharp {
+            let flat: Vec<Polyline<f64>> = l
+                .iter()
+                .map(|p| flatten_corner_arcs(p, params.tool_diameter))
+                .collect();
+            sample_level(&flat, step)
+        } else {
+            sample_level(&l, step)
+        }
+    };
     let mut d = r + f;
     if f > 1e-9 {
         let l = offset_loops(pocket, d);
         if !l.is_empty() {
-            levels.push(sample_level(&l, step));
+            levels.push(rough(l));
         } else {
             d = r;
         }
@@ -114,12 +196,12 @@ pub fn offset_path(pocket: &Pocket, params: &PocketParams) -> Result<PocketPath,
             if s > r {
                 let l = offset_loops(pocket, d + s / 2.0);
                 if !l.is_empty() {
-                    levels.push(sample_level(&l, step));
+                    levels.push(rough(l));
                 }
             }
             break;
         }
-        levels.push(sample_level(&l, step));
+        levels.push(rough(l));
         d += s;
     }
     let mut max_gap: f64 = 0.0;

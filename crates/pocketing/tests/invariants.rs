@@ -8,7 +8,8 @@ use proptest::prelude::*;
 use thinplan_pocketing::bench::{bench_family, bench_params, rounded_rect};
 use thinplan_pocketing::geom::{point_in_loop, sample_pline, SegIndex};
 use thinplan_pocketing::{
-    curvilinear_path, offset_path, Field, Method, Pocket, PocketParams, PocketPath,
+    curvilinear_path, offset_path, offset_path_gap_matched, offset_path_sharp, Field, Method,
+    Pocket, PocketParams, PocketPath,
 };
 
 fn check(pocket: &Pocket, params: &PocketParams, path: &PocketPath, label: &str) {
@@ -107,6 +108,7 @@ fn bench_case(name: &str, l: f64, coarse: bool, field: thinplan_pocketing::Field
     }
     let off = offset_path(&bp.pocket, &params).unwrap();
     check(&bp.pocket, &params, &off, &format!("offset {name} L={l}"));
+    check_baselines(&bp.pocket, &params, &off, &format!("{name} L={l}"));
     let cur = curvilinear_path(&bp.pocket, &params).unwrap();
     assert_eq!(
         cur.method,
@@ -120,6 +122,53 @@ fn bench_case(name: &str, l: f64, coarse: bool, field: thinplan_pocketing::Field
         &cur,
         &format!("curvilinear {name} L={l} {field:?}"),
     );
+    // the spiral can never have fewer turns than the radial bound (a spiral with gap ≤ s); the
+    // bench reports how far above it each pocket is (slot: 19 vs 16, crowding at the ends)
+    let bound = cur.turns_lower_bound(params.stepover).unwrap();
+    let turns = cur.roughing_turns();
+    assert!(
+        turns >= bound,
+        "{name} L={l}: {turns} spiral turns below the bound {bound}"
+    );
+}
+
+/// The sharp-cornered and the gap-matched offset baselines: same invariants as the offset
+/// path (no gouge, coverage, links ≤ one ring step); sharp rings are polylines (no roughing arc
+/// left: fewer points, never longer, the same finishing pass); gap-matched rings
+/// keep the measured gap ≤ the stepover.
+fn check_baselines(pocket: &Pocket, params: &PocketParams, off: &PocketPath, label: &str) {
+    let sharp = offset_path_sharp(pocket, params).unwrap();
+    check(pocket, params, &sharp, &format!("offset-sharp {label}"));
+    // same rings, arcs → chords: never longer, fewer points, the same finishing pass
+    assert!(
+        sharp.length() <= off.length() + 1e-6,
+        "{label}: sharp longer"
+    );
+    assert!(
+        sharp.points.len() < off.points.len(),
+        "{label}: no arc flattened"
+    );
+    let finish_len = |p: &PocketPath| -> f64 {
+        p.points[p.finish_start..]
+            .windows(2)
+            .map(|w| w[0].distance(w[1]))
+            .sum()
+    };
+    assert!(
+        (finish_len(&sharp) - finish_len(off)).abs() <= 1e-6 * finish_len(off),
+        "{label}: finishing pass differs"
+    );
+    let (gm, ring_step) = offset_path_gap_matched(pocket, params).unwrap();
+    assert!(ring_step <= params.stepover && ring_step > 0.3 * params.stepover);
+    assert!(
+        gm.max_gap <= params.stepover + 1e-9,
+        "{label}: gap-matched gap {} > {}",
+        gm.max_gap,
+        params.stepover
+    );
+    let mut p = params.clone();
+    p.stepover = ring_step.max(p.finish_stepover);
+    check(pocket, &p, &gm, &format!("offset-gap-matched {label}"));
 }
 
 // Default run: a representative subset on coarser (still converged-enough) meshes. The full
