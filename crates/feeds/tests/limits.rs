@@ -200,6 +200,10 @@ proptest! {
         };
         let t_fast = schedule_polyline(&p, &caps, &m).total_time;
         let t_slow = schedule_polyline(&p, &caps, &slow).total_time;
-        prop_assert!(t_slow >= t_fast * (1.0 - 1e-12), "{t_slow} < {t_fast}");
+        // The schedule is within about 1 % of the time-optimal one (TOPP-RA,
+        // docs/BENCHMARKS.md), not exactly optimal: its greedy passes can
+        // land a hair apart on two machines (seen: 0.012 % on a 98 s path),
+        // so monotonicity holds to that accuracy, not to rounding.
+        prop_assert!(t_slow >= t_fast * (1.0 - 1e-3), "{t_slow} < {t_fast}");
     }
 }
