@@ -504,6 +504,7 @@ fn every_sample_program_never_gouges() {
         "isogrid",
         "pentagon_pocket",
         "wing_rib",
+        "chamfered_rib",
     ]);
 }
 

@@ -5,10 +5,11 @@
 //! the wall is sized: it adds step boundaries (the step separation line, a
 //! cut-out zone's bottom), height zones with other sizes, a cap on the
 //! features' width, and depression features to insert in the wall's
-//! sequence, each with its placement rule.
+//! sequence, each with its placement rule. `Details` (figure 4.10) inserts
+//! a chamfer's or fillet's wedge the same way.
 
 use glam::{DVec2, DVec3};
-use thinplan_knowledge::{ConnectedWalls, Cutouts, LargeHoles, StrategyMillingMode};
+use thinplan_knowledge::{ConnectedWalls, Cutouts, Details, LargeHoles, StrategyMillingMode};
 use thinplan_plan::{
     Adjacency, Prism, PrismFrame, ProfileLoop, ProfileVertex, Region, StiffnessFeature,
     StiffnessFeatureId, StiffnessKind, WallRole,
@@ -43,6 +44,8 @@ pub(crate) enum Placement {
     /// After the last wall step (either side) beside it: the upper half of
     /// a large hole (figure 4.8), a large cut-out's pieces.
     Last,
+    /// Before all of the wall's features: a large detail (figure 4.10).
+    First,
 }
 
 /// A depression's machining feature to insert in the wall's sequence: the
@@ -56,6 +59,9 @@ pub(crate) struct Insert {
     pub rule: String,
     pub values: Values,
     pub note: String,
+    /// Edges of the piece ending here are `open` (a detail's corner,
+    /// outside the part); `None`: every uncut edge is `product`.
+    pub open_at: Option<DVec2>,
 }
 
 /// A cap on the width of the wall's features (figure 4.6).
@@ -121,7 +127,8 @@ impl WallGeom {
 }
 
 /// The depressions of `kind` connected to the wall and through it (axis
-/// along the wall normal), by stiffness-feature id.
+/// along the wall normal), or the details of `kind` on it (wedge in the
+/// wall's frame), by stiffness-feature id.
 fn depressions<'a>(
     ctx: &Ctx<'a>,
     sf: &StiffnessFeature,
@@ -148,7 +155,14 @@ fn depressions<'a>(
         let Some(shape) = d.shape.as_ref() else {
             continue;
         };
-        if d.axis.normalize_or_zero().dot(g.n).abs() < 0.9 || out.iter().any(|o| o.sf.id == d.id) {
+        // A depression goes through the wall (its axis along the normal);
+        // a detail's wedge lies in the wall's slab (its frame z the normal).
+        let along = if matches!(kind, StiffnessKind::Chamfer | StiffnessKind::Fillet) {
+            shape.frame.z
+        } else {
+            d.axis
+        };
+        if along.normalize_or_zero().dot(g.n).abs() < 0.9 || out.iter().any(|o| o.sf.id == d.id) {
             continue;
         }
         let pts = prism_points(shape);
@@ -190,6 +204,7 @@ pub(crate) fn piece(
     shape: &Prism,
     lo: f64,
     hi: f64,
+    open_at: Option<DVec2>,
 ) -> Option<(Prism, Vec<Adjacency>)> {
     let fx = shape.frame.x.normalize_or_zero();
     let fz = shape.frame.z.normalize_or_zero();
@@ -214,6 +229,8 @@ pub(crate) fn piece(
             let (a, b) = (p[i], p[(i + 1) % n]);
             if (on(a, lo) && on(b, lo)) || (on(a, hi) && on(b, hi)) {
                 Adjacency::Feature
+            } else if open_at.is_some_and(|c| a.distance(c) < 1e-6 || b.distance(c) < 1e-6) {
+                Adjacency::Open
             } else {
                 Adjacency::Product
             }
@@ -302,6 +319,7 @@ pub(crate) fn large_holes(
                 placement: Placement::Exposed,
                 rule: rule.clone(),
                 values: base(false),
+                open_at: None,
                 note: format!(
                     "{}: small hole ({:.2} mm ≤ {:.2} mm tall) in {}, machined as soon as exposed",
                     d.sf.id,
@@ -323,6 +341,7 @@ pub(crate) fn large_holes(
                 placement: Placement::Last,
                 rule: rule.clone(),
                 values: base(true),
+                open_at: None,
                 note: format!(
                     "{}: upper half of a large hole in {} (above the step separation line, \
                      {:.2} mm below the wall top), machined after the wall steps beside it",
@@ -346,6 +365,7 @@ pub(crate) fn large_holes(
                 placement: Placement::Exposed,
                 rule: rule.clone(),
                 values: base(true),
+                open_at: None,
                 note: format!(
                     "{}: lower half of a large hole in {}, machined as soon as exposed",
                     d.sf.id, sf.id
@@ -415,6 +435,7 @@ pub(crate) fn cutouts(
                 ("h", sizes.h),
                 ("large", 0.0),
             ],
+            open_at: None,
             note: format!(
                 "{}: small cut-out ({depth:.2} mm deep, h = {}) in {}, inserted in the wall's \
                  sequence as soon as exposed (figure 4.7(b))",
@@ -513,6 +534,7 @@ pub(crate) fn cutouts(
                     ("big_h", zone.big_h),
                     ("large", 1.0),
                 ],
+                open_at: None,
                 note: format!(
                     "{}: large cut-out in {}, piece {} of {n} (steps of H = {}), after the wall \
                      steps beside it (figure 4.7(c))",
@@ -523,6 +545,74 @@ pub(crate) fn cutouts(
                 ),
             });
         }
+    }
+}
+
+/// Figure 4.10: the details (chamfers, fillets) across the wall's corners.
+/// Each wedge is one feature owned by the detail: right after the wall step
+/// that exposes it (reaches down to its bottom), or before all of the
+/// wall's features when it is taller than `large_above_big_h` · H.
+pub(crate) fn details(
+    ctx: &Ctx,
+    sf: &StiffnessFeature,
+    g: &WallGeom,
+    b: &Details,
+    sizes: Sz,
+    eff: &mut Effects,
+) {
+    let rule = format!("{RULE_PREFIX}{}", b.id);
+    let large_above = b.large_above_big_h * sizes.big_h;
+    let mut found = depressions(ctx, sf, g, StiffnessKind::Chamfer);
+    found.extend(depressions(ctx, sf, g, StiffnessKind::Fillet));
+    found.sort_by_key(|d| d.sf.id);
+    for d in &found {
+        let (lo, hi) = (d.lo.max(g.foot), d.hi.min(g.top));
+        let height = d.hi - d.lo;
+        let large = height > large_above + EPS;
+        let kind = if d.sf.kind == StiffnessKind::Chamfer {
+            "chamfer"
+        } else {
+            "fillet"
+        };
+        // The corner the detail replaces, as recognition found it.
+        let v = &d.sf.provenance.values;
+        let open_at = match (v.get("corner_x"), v.get("corner_y")) {
+            (Some(x), Some(y)) => Some(DVec2::new(*x, *y)),
+            _ => None,
+        };
+        eff.inserts.push(Insert {
+            owner: d.sf.id,
+            shape: d.shape.clone(),
+            lo,
+            hi,
+            placement: if large {
+                Placement::First
+            } else {
+                Placement::Exposed
+            },
+            rule: rule.clone(),
+            values: vec![
+                ("detail_height", height),
+                ("detail_length", d.x1 - d.x0),
+                ("big_h", sizes.big_h),
+                ("large_above", large_above),
+                ("large", if large { 1.0 } else { 0.0 }),
+            ],
+            open_at,
+            note: if large {
+                format!(
+                    "{}: large {kind} ({height:.2} mm > {large_above:.2} mm tall) on {}, \
+                     machined before all of the wall's features (figure 4.10)",
+                    d.sf.id, sf.id
+                )
+            } else {
+                format!(
+                    "{}: {kind} ({height:.2} mm ≤ {large_above:.2} mm tall) on {}, machined \
+                     with the wall's steps as soon as exposed (figure 4.10)",
+                    d.sf.id, sf.id
+                )
+            },
+        });
     }
 }
 

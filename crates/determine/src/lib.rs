@@ -15,11 +15,11 @@
 //!   wall over `[t/2, t/2 + width]` (width = B_RF · `width_in_b_rf`, cut back
 //!   to the blank); they are chained top-down alternating sides: A1, the
 //!   small features A1 covers, A2, …;
-//! - `ConnectedWalls`, `Cutouts`, `LargeHoles` (figures 4.6–4.8) are read
-//!   before `WallSteps`, which effectuates them once the wall is sized:
-//!   step boundaries (the step separation line), zones with other sizes, a
-//!   width cap and depression features inserted in the wall's sequence
-//!   (module `influence`);
+//! - `ConnectedWalls`, `Cutouts`, `LargeHoles`, `Details` (figures
+//!   4.6–4.8, 4.10) are read before `WallSteps`, which effectuates them
+//!   once the wall is sized: step boundaries (the step separation line),
+//!   zones with other sizes, a width cap and depression or detail features
+//!   inserted in the wall's sequence (module `influence`);
 //! - `WebFaceMill` makes a web's top-down layers (see [`web`]).
 //!
 //! Each owner's features form one chain of `Before` constraints, so a
@@ -164,9 +164,10 @@ fn run_strategy(
     for block in &strategy.blocks {
         match block {
             Block::SideChoice(b) => side = Some(choose_side(ctx, sf, &g, b)),
-            Block::ConnectedWalls(_) | Block::Cutouts(_) | Block::LargeHoles(_) => {
-                influences.push(block)
-            }
+            Block::ConnectedWalls(_)
+            | Block::Cutouts(_)
+            | Block::LargeHoles(_)
+            | Block::Details(_) => influences.push(block),
             Block::WallSteps(b) => {
                 let side = side.clone().unwrap_or((1.0, "no side choice block".into()));
                 chain.extend(wall_steps(ctx, sf, &g, b, side, &influences, out));
@@ -456,6 +457,7 @@ fn wall_steps(
             Block::ConnectedWalls(c) => influence::connected_walls(ctx, sf, c, wall_sz, &mut eff),
             Block::Cutouts(c) => influence::cutouts(ctx, sf, g, c, wall_sz, b.mode, &mut eff),
             Block::LargeHoles(c) => influence::large_holes(ctx, sf, g, c, wall_sz, &mut eff),
+            Block::Details(c) => influence::details(ctx, sf, g, c, wall_sz, &mut eff),
             _ => {}
         }
     }
@@ -554,8 +556,9 @@ fn wall_steps(
             }
         }
     }
-    // Where each inserted depression feature goes: after which step.
-    let after: Vec<usize> = eff
+    // Where each inserted depression feature goes: after which step (none:
+    // before the first).
+    let after: Vec<Option<usize>> = eff
         .inserts
         .iter()
         .map(|ins| {
@@ -565,11 +568,14 @@ fn wall_steps(
                 .position(|s| s.lo <= ins.lo + EPS)
                 .unwrap_or(last);
             match ins.placement {
-                Placement::Exposed => exposed,
-                Placement::Last => steps
-                    .iter()
-                    .rposition(|s| s.lo < ins.hi - EPS && s.hi > ins.lo + EPS)
-                    .unwrap_or(exposed),
+                Placement::Exposed => Some(exposed),
+                Placement::Last => Some(
+                    steps
+                        .iter()
+                        .rposition(|s| s.lo < ins.hi - EPS && s.hi > ins.lo + EPS)
+                        .unwrap_or(exposed),
+                ),
+                Placement::First => None,
             }
         })
         .collect();
@@ -586,6 +592,7 @@ fn wall_steps(
     // Inserted features waiting for the wall's next step.
     let mut pending: Vec<(MachiningFeatureId, Provenance)> = Vec::new();
     let (mut i_large, mut i_small) = (0, 0);
+    insert_due(ctx, sf, g, &eff, &after, None, &chain, &mut pending, out);
     for (i, st) in steps.iter().enumerate() {
         let values = |mut p: Provenance| {
             p = p
@@ -671,64 +678,84 @@ fn wall_steps(
             extend_chain(out, &mut chain, id, p);
         }
         // The depression features this step makes due.
-        for (ins, _) in eff.inserts.iter().zip(&after).filter(|(_, a)| **a == i) {
-            let Some((shape, side_adjacency)) = influence::piece(g, &ins.shape, ins.lo, ins.hi)
-            else {
-                out.warnings.push(format!(
-                    "{}: its piece at depth {:.2}–{:.2} mm of {} is empty; not made",
-                    ins.owner,
-                    g.top - ins.hi,
-                    g.top - ins.lo,
-                    sf.id
-                ));
-                continue;
-            };
-            let id = MachiningFeatureId(out.features.len() as u32);
-            let mut prov = Provenance::new(ProvenanceSource::Knowledge, ins.rule.clone());
-            for (k, v) in &ins.values {
-                prov = prov.with_value(*k, *v);
-            }
-            prov = prov
-                .with_value("wall", f64::from(sf.id.0))
-                .with_value("depth_from", g.top - ins.hi)
-                .with_value("depth_to", g.top - ins.lo)
-                .with_value("access_x", ctx.up.x)
-                .with_value("access_y", ctx.up.y)
-                .with_value("access_z", ctx.up.z);
-            let mut cp = prov.clone();
-            prov.note = ins.note.clone();
-            out.features.push(MachiningFeature {
-                id,
-                owner: ins.owner,
-                shape,
-                side_adjacency,
-                hole_adjacency: Vec::new(),
-                bottom_adjacency: Adjacency::Open,
-                provenance: prov,
-            });
-            cp.note = format!(
-                "{}: {} piece of {}, {}",
-                ins.owner,
-                match ins.placement {
-                    Placement::Exposed => "as soon as exposed",
-                    Placement::Last => "after the wall beside it",
-                },
-                sf.id,
-                "inserted in the wall's steps"
-            );
-            if let Some(&prev) = chain.last() {
-                out.constraints.push(Constraint {
-                    first: prev,
-                    second: id,
-                    kind: ConstraintKind::Before,
-                    priority: 0,
-                    provenance: cp.clone(),
-                });
-            }
-            pending.push((id, cp));
-        }
+        insert_due(ctx, sf, g, &eff, &after, Some(i), &chain, &mut pending, out);
     }
     chain
+}
+
+/// Makes the inserted depression and detail features due after step `due`
+/// (`None`: before the wall's first step): each after the wall's chain so
+/// far and, through `pending`, before the wall's next step.
+#[allow(clippy::too_many_arguments)]
+fn insert_due(
+    ctx: &Ctx,
+    sf: &StiffnessFeature,
+    g: &WallGeom,
+    eff: &Effects,
+    after: &[Option<usize>],
+    due: Option<usize>,
+    chain: &[MachiningFeatureId],
+    pending: &mut Vec<(MachiningFeatureId, Provenance)>,
+    out: &mut Determination,
+) {
+    for (ins, _) in eff.inserts.iter().zip(after).filter(|(_, a)| **a == due) {
+        let Some((shape, side_adjacency)) =
+            influence::piece(g, &ins.shape, ins.lo, ins.hi, ins.open_at)
+        else {
+            out.warnings.push(format!(
+                "{}: its piece at depth {:.2}–{:.2} mm of {} is empty; not made",
+                ins.owner,
+                g.top - ins.hi,
+                g.top - ins.lo,
+                sf.id
+            ));
+            continue;
+        };
+        let id = MachiningFeatureId(out.features.len() as u32);
+        let mut prov = Provenance::new(ProvenanceSource::Knowledge, ins.rule.clone());
+        for (k, v) in &ins.values {
+            prov = prov.with_value(*k, *v);
+        }
+        prov = prov
+            .with_value("wall", f64::from(sf.id.0))
+            .with_value("depth_from", g.top - ins.hi)
+            .with_value("depth_to", g.top - ins.lo)
+            .with_value("access_x", ctx.up.x)
+            .with_value("access_y", ctx.up.y)
+            .with_value("access_z", ctx.up.z);
+        let mut cp = prov.clone();
+        prov.note = ins.note.clone();
+        out.features.push(MachiningFeature {
+            id,
+            owner: ins.owner,
+            shape,
+            side_adjacency,
+            hole_adjacency: Vec::new(),
+            bottom_adjacency: Adjacency::Open,
+            provenance: prov,
+        });
+        cp.note = format!(
+            "{}: {} piece of {}, {}",
+            ins.owner,
+            match ins.placement {
+                Placement::Exposed => "as soon as exposed",
+                Placement::Last => "after the wall beside it",
+                Placement::First => "before all of the wall's features",
+            },
+            sf.id,
+            "inserted in the wall's steps"
+        );
+        if let Some(&prev) = chain.last() {
+            out.constraints.push(Constraint {
+                first: prev,
+                second: id,
+                kind: ConstraintKind::Before,
+                priority: 0,
+                provenance: cp.clone(),
+            });
+        }
+        pending.push((id, cp));
+    }
 }
 
 /// Appends `id` to a wall's or web's machining order: after the chain's last

@@ -69,6 +69,10 @@ pub enum Block {
     /// upper half machined last (figure 4.8); small ones inserted as soon
     /// as exposed.
     LargeHoles(LargeHoles),
+    /// Details on a wall (chamfers, fillets): their own machining feature
+    /// inserted in the wall's sequence as soon as exposed, or before all of
+    /// the wall's features when large (figure 4.10).
+    Details(Details),
 }
 
 impl Block {
@@ -80,6 +84,7 @@ impl Block {
             Block::ConnectedWalls(b) => &b.id,
             Block::Cutouts(b) => &b.id,
             Block::LargeHoles(b) => &b.id,
+            Block::Details(b) => &b.id,
         }
     }
 }
@@ -201,6 +206,22 @@ pub struct LargeHoles {
     pub separation_in_tool_diameters: f64,
 }
 
+/// Figure 4.10: a detail (chamfer, fillet) across a wall's corner is a
+/// stiffness feature of its own; its machining feature (the wedge it
+/// removes) is machined with the wall's steps, right after the step that
+/// exposes it, so the wall's remaining features still support it. "In case
+/// the chamfer is large" it is machined before all of the wall's features.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Details {
+    pub id: String,
+    /// A detail taller (along the wall's height) than this multiple of the
+    /// wall's large permissible height H is large: no single step would
+    /// expose it, and its wedge would be cut from a wall already thinned
+    /// over more than H. The thesis gives no number.
+    pub large_above_big_h: f64,
+}
+
 impl StrategyKnowledge {
     /// The strategy for a role, if any.
     pub fn for_role(&self, role: StrategyRole) -> Option<&Strategy> {
@@ -303,7 +324,10 @@ impl StrategyKnowledge {
                             ));
                         }
                     }
-                    Block::ConnectedWalls(_) | Block::Cutouts(_) | Block::LargeHoles(_) => {
+                    Block::ConnectedWalls(_)
+                    | Block::Cutouts(_)
+                    | Block::LargeHoles(_)
+                    | Block::Details(_) => {
                         // Influences on the wall's steps: they must be known
                         // before the steps are made (figure 4.13).
                         if seen_steps {
@@ -337,6 +361,9 @@ impl StrategyKnowledge {
                                     true,
                                 );
                                 check("min_last_piece", c.min_last_piece, true);
+                            }
+                            Block::Details(d) => {
+                                check("large_above_big_h", d.large_above_big_h, false)
                             }
                             Block::LargeHoles(h) => {
                                 check(

@@ -16,7 +16,7 @@ fn planned(name: &str) -> Session {
     s
 }
 
-const SAMPLES: [&str; 8] = [
+const SAMPLES: [&str; 9] = [
     "tall_rib",
     "flange_cutouts",
     "wall_holes",
@@ -25,6 +25,7 @@ const SAMPLES: [&str; 8] = [
     "isogrid",
     "pentagon_pocket",
     "wing_rib",
+    "chamfered_rib",
 ];
 
 fn loop_area(pts: &[[f64; 2]]) -> f64 {
