@@ -71,3 +71,33 @@ fn bad_inputs_are_named() {
     assert_eq!(e.kind, ErrorKind::Input);
     assert!(e.message.contains("/no/such/part.step"), "{}", e.message);
 }
+
+/// A plan through every stage saves and loads back to the same bytes.
+#[test]
+fn a_full_plan_round_trips_through_its_file() {
+    let mut s = session("builtin:tall_rib");
+    s.run_all(|_| {}).expect("plans");
+    let dir = std::env::temp_dir().join(format!("thinplan-rt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("p.plan.json");
+    thinplan_plan::save(&s.plan, &path).unwrap();
+    let back = thinplan_plan::load(&path).unwrap();
+    let (a, b) = (
+        thinplan_plan::io::to_bytes(&s.plan),
+        thinplan_plan::io::to_bytes(&back),
+    );
+    if a != b {
+        let (a, b) = (String::from_utf8_lossy(&a), String::from_utf8_lossy(&b));
+        let i = a
+            .chars()
+            .zip(b.chars())
+            .position(|(x, y)| x != y)
+            .unwrap_or(0);
+        panic!(
+            "differs at {i}: {:?} vs {:?}",
+            &a[i.saturating_sub(80)..(i + 80).min(a.len())],
+            &b[i.saturating_sub(80)..(i + 80).min(b.len())]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
