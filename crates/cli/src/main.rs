@@ -413,17 +413,7 @@ impl From<PipelineError> for CliError {
 }
 
 fn error_chain(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
-    let mut src = e.source();
-    while let Some(inner) = src {
-        let t = inner.to_string();
-        if !s.contains(&t) {
-            s.push_str(": ");
-            s.push_str(&t);
-        }
-        src = inner.source();
-    }
-    s
+    thinplan_pipeline::error_chain(e)
 }
 
 /// The `inspect --json` contract (docs/CLI.md).
