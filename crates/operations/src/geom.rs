@@ -354,24 +354,15 @@ impl Area {
     }
 }
 
-/// Even-odd containment in a set of polygons.
+/// Even-odd containment in a set of polygons (each loop tested by the
+/// pocketing crate's point-in-loop).
 pub fn inside(p: DVec2, polys: &[Vec<DVec2>]) -> bool {
-    let mut c = false;
-    for pts in polys {
-        let n = pts.len();
-        let mut j = n - 1;
-        for i in 0..n {
-            let (a, b) = (pts[i], pts[j]);
-            if (a.y > p.y) != (b.y > p.y) {
-                let x = a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y);
-                if p.x < x {
-                    c = !c;
-                }
-            }
-            j = i;
-        }
-    }
-    c
+    polys
+        .iter()
+        .filter(|pts| thinplan_pocketing::geom::point_in_loop(p, pts))
+        .count()
+        % 2
+        == 1
 }
 
 /// Distance from `p` to the nearest polygon edge.
