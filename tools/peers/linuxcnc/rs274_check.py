@@ -14,6 +14,7 @@ program, 1 on an interpreter error, 2 when rs274 is not installed (run
 setup.sh).
 """
 import argparse
+import fcntl
 import json
 import math
 import os
@@ -38,14 +39,18 @@ def run_rs274(root, program, table):
     env = dict(os.environ)
     libs = [os.path.join(root, "usr", "lib"), os.path.join(root, "usr", "lib", "x86_64-linux-gnu")]
     env["LD_LIBRARY_PATH"] = ":".join(libs + [env.get("LD_LIBRARY_PATH", "")])
-    return subprocess.run(
-        [exe, "-t", table, "-g", program],
-        stdin=subprocess.DEVNULL,
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=600,
-    )
+    # Two rs274 processes at once share the tool-data memory map and one of
+    # them dies of SIGBUS (seen with parallel tests): one at a time.
+    with open(os.path.join(root, ".rs274.lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        return subprocess.run(
+            [exe, "-t", table, "-g", program],
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=600,
+        )
 
 
 def arc_length(start, end, centre, rotation, axis_start, axis_end):
@@ -157,7 +162,14 @@ def main():
     err_lines = [l for l in proc.stderr.splitlines() if l.strip() and l.strip() != "executing"]
     out = summarise(proc.stdout, a.skip)
     out["ok"] = proc.returncode == 0 and not err_lines and out["units"] == "mm"
-    out["error"] = "\n".join(err_lines) if err_lines else ("" if out["units"] == "mm" else "not metric")
+    if err_lines:
+        out["error"] = "\n".join(err_lines)
+    elif proc.returncode < 0:
+        out["error"] = f"rs274 killed by signal {-proc.returncode}"
+    elif proc.returncode != 0:
+        out["error"] = f"rs274 exited with {proc.returncode} and no message"
+    else:
+        out["error"] = "" if out["units"] == "mm" else "not metric"
     out["returncode"] = proc.returncode
     out["program"] = a.program
     print(json.dumps(out, indent=1, sort_keys=True))
