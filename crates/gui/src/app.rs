@@ -30,6 +30,19 @@ struct Forms {
     z_min: f64,
     z_max: f64,
     spindle: f64,
+    /// Machining-feature edits: split height, split line (x1, y1, x2, y2
+    /// in the feature's profile coordinates), the feature to merge with.
+    split_z: f64,
+    split_line: [f64; 4],
+    merge_with: Option<thinplan_plan::MachiningFeatureId>,
+    /// A profile being drawn (`x, y; …` in the set-up's plan view) and its
+    /// z range along up.
+    draw_text: String,
+    draw_z: (f64, f64),
+    /// Export: post-processor id and the two files.
+    post: String,
+    gcode_path: String,
+    sheet_path: String,
     /// For which selection the numbers above were filled in.
     filled_for: Option<(Entity, u64)>,
     other: Option<StiffnessFeatureId>,
@@ -48,6 +61,40 @@ pub struct ThinplanApp {
     /// Simulation on/off and position (kept when the plan changes if it fits).
     pub simulate: bool,
     pub sim_index: usize,
+    /// The in-window file picker (egui-file-dialog) and what it was opened for.
+    pub file_dialog: egui_file_dialog::FileDialog,
+    pub picking: Option<Picking>,
+}
+
+/// What the file picker was opened for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Picking {
+    Part,
+    Plan,
+}
+
+/// The file picker, filtered to parts (STEP or native `.part.ron`) or
+/// plans; it starts in the bundled parts folder when there is one.
+fn file_dialog(picking: Picking) -> egui_file_dialog::FileDialog {
+    let d = egui_file_dialog::FileDialog::new();
+    let d = match picking {
+        Picking::Part => d
+            .title("Open a part")
+            .add_file_filter_extensions(
+                "STEP or native part",
+                vec!["step", "stp", "STEP", "STP", "ron"],
+            )
+            .default_file_filter("STEP or native part"),
+        Picking::Plan => d
+            .title("Open a plan")
+            .add_file_filter_extensions("plans", vec!["json", "ron"])
+            .default_file_filter("plans"),
+    };
+    let parts = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/parts");
+    match (picking, parts.canonicalize()) {
+        (Picking::Part, Ok(dir)) if dir.is_dir() => d.initial_directory(dir),
+        _ => d,
+    }
 }
 
 impl ThinplanApp {
@@ -85,6 +132,8 @@ impl ThinplanApp {
             tree_scrolled_to: None,
             simulate: false,
             sim_index: 0,
+            file_dialog: file_dialog(Picking::Part),
+            picking: None,
         };
         app.fill_forms_from_plan();
         app
@@ -143,9 +192,10 @@ impl ThinplanApp {
                 });
             if ui.button("Open part").clicked() {
                 let src = self.forms.part_source.trim().to_string();
-                if self.state.open_part(&src, &self.setup_request()) {
-                    self.viewport.camera = Default::default();
-                }
+                self.open_part(&src);
+            }
+            if ui.button("Browse…").clicked() {
+                self.pick(Picking::Part);
             }
             ui.separator();
             let running = self.state.is_running();
@@ -204,6 +254,9 @@ impl ThinplanApp {
                     self.fill_forms_from_plan();
                 }
             }
+            if ui.button("Browse plans…").clicked() {
+                self.pick(Picking::Plan);
+            }
         });
         if let Some(p) = self.state.plan() {
             ui.horizontal(|ui| {
@@ -218,6 +271,51 @@ impl ThinplanApp {
                     });
                 }
             });
+        }
+    }
+
+    /// Sets the export form's files (tests; the form is otherwise typed).
+    pub fn set_export_paths(&mut self, gcode: &std::path::Path, sheet: &std::path::Path) {
+        self.forms.gcode_path = gcode.display().to_string();
+        self.forms.sheet_path = sheet.display().to_string();
+    }
+
+    fn open_part(&mut self, source: &str) {
+        if self.state.open_part(source, &self.setup_request()) {
+            self.viewport.camera = Default::default();
+            self.forms.gcode_path.clear();
+            self.fill_forms_from_plan();
+        }
+    }
+
+    /// Opens the file picker for a part or a plan.
+    pub fn pick(&mut self, what: Picking) {
+        if self.picking != Some(what) {
+            self.file_dialog = file_dialog(what);
+        }
+        self.picking = Some(what);
+        self.file_dialog.pick_file();
+    }
+
+    /// Shows the file picker while it is open and opens what was picked.
+    fn file_picker(&mut self, ctx: &egui::Context) {
+        self.file_dialog.update(ctx);
+        let Some(path) = self.file_dialog.take_picked() else {
+            return;
+        };
+        match self.picking {
+            Some(Picking::Part) => {
+                let src = path.display().to_string();
+                self.forms.part_source = src.clone();
+                self.open_part(&src);
+            }
+            Some(Picking::Plan) => {
+                self.forms.plan_path = path.display().to_string();
+                if self.state.open_plan(&path) {
+                    self.fill_forms_from_plan();
+                }
+            }
+            None => {}
         }
     }
 
@@ -271,6 +369,7 @@ impl ThinplanApp {
                     self.state.apply_setup(&req);
                 }
             });
+        egui::CollapsingHeader::new("Export").show(ui, |ui| self.export_form(ui));
         // Kept open while the knowledge has errors: they must be seen.
         let errors = !self.state.knowledge_status.errors.is_empty();
         egui::CollapsingHeader::new("Knowledge")
@@ -299,6 +398,58 @@ impl ThinplanApp {
                     ui.colored_label(Color32::LIGHT_RED, e);
                 }
             });
+    }
+
+    fn export_form(&mut self, ui: &mut egui::Ui) {
+        let Some(k) = self.state.knowledge() else {
+            ui.label("no part open");
+            return;
+        };
+        let posts: Vec<String> = k.posts.keys().cloned().collect();
+        if self.forms.post.is_empty() {
+            self.forms.post = thinplan_knowledge::DEFAULT_POST.to_string();
+        }
+        if self.forms.gcode_path.is_empty() {
+            let stem = self
+                .state
+                .plan()
+                .map(|p| export_stem(&p.part.source))
+                .unwrap_or_else(|| "part".into());
+            self.forms.gcode_path = format!("{stem}.ngc");
+            self.forms.sheet_path = format!("{stem}.sheet.html");
+        }
+        egui::Grid::new("export").num_columns(2).show(ui, |ui| {
+            ui.label("post");
+            egui::ComboBox::from_id_salt("post")
+                .selected_text(self.forms.post.as_str())
+                .show_ui(ui, |ui| {
+                    for p in &posts {
+                        ui.selectable_value(&mut self.forms.post, p.clone(), p);
+                    }
+                });
+            ui.end_row();
+            ui.label("G-code file");
+            ui.add(egui::TextEdit::singleline(&mut self.forms.gcode_path).id_salt("gcode path"));
+            ui.end_row();
+            ui.label("setup sheet");
+            ui.add(egui::TextEdit::singleline(&mut self.forms.sheet_path).id_salt("sheet path"));
+            ui.end_row();
+        });
+        let ready = self
+            .state
+            .plan()
+            .is_some_and(|p| p.stages_done.contains(&Stage::Order));
+        if ui
+            .add_enabled(ready, egui::Button::new("Export G-code and sheet"))
+            .on_disabled_hover_text("run all stages first")
+            .clicked()
+        {
+            let g = PathBuf::from(self.forms.gcode_path.trim());
+            let sheet = self.forms.sheet_path.trim();
+            let sheet = (!sheet.is_empty()).then(|| PathBuf::from(sheet));
+            let post = self.forms.post.clone();
+            self.state.export(&g, sheet.as_deref(), &post);
+        }
     }
 
     fn tree(&mut self, ui: &mut egui::Ui) {
@@ -378,11 +529,20 @@ impl ThinplanApp {
                 if let Some(f) = relations::sf(plan, id) {
                     self.forms.thickness = f.thickness.unwrap_or(0.0);
                 }
+                self.forms.draw_z = drawing::plan_z_range(plan, id);
             }
             Entity::Machining(id) => {
                 if let Some(f) = relations::mf(plan, id) {
                     self.forms.z_min = f.shape.z_min;
                     self.forms.z_max = f.shape.z_max;
+                    self.forms.split_z = 0.5 * (f.shape.z_min + f.shape.z_max);
+                    // A line across the middle of the profile, along its y.
+                    let (lo, hi) = profile_box(&f.shape.region.outer);
+                    let cx = 0.5 * (lo.x + hi.x);
+                    self.forms.split_line = [cx, lo.y - 1.0, cx, hi.y + 1.0];
+                    self.forms.merge_with = None;
+                    let (a, b) = drawing::plan_z_range(plan, f.owner);
+                    self.forms.draw_z = (a, b);
                 }
             }
             Entity::Operation(id) => {
@@ -569,6 +729,20 @@ impl ThinplanApp {
             Act::Resize(id, lo, hi) => {
                 s.resize_machining(id, lo, hi);
             }
+            Act::SplitAt(id, z) => {
+                s.split_machining_at(id, z);
+            }
+            Act::SplitLine(id, p, q) => {
+                s.split_machining_by_line(id, p, q);
+            }
+            Act::Merge(a, b) => {
+                s.merge_machining(a, b);
+            }
+            Act::Draw(owner, pts, lo, hi) => {
+                if s.add_drawn_machining(owner, &pts, lo, hi) {
+                    self.forms.draw_text.clear();
+                }
+            }
             Act::Spindle(id, rpm) => {
                 s.set_spindle(id, rpm);
             }
@@ -667,6 +841,7 @@ impl ThinplanApp {
             ui.separator();
             self.network.ui(ui, &mut self.state);
         });
+        self.file_picker(ui.ctx());
     }
 }
 
@@ -700,6 +875,7 @@ fn editor(ui: &mut egui::Ui, forms: &mut Forms, plan: &Plan, sel: Entity, acts: 
                     }
                 }
             });
+            drawing::draw_section(ui, forms, plan, id, acts);
             ui.label(RichText::new("Sequence constraints").strong());
             let mut remove = None;
             for (i, c) in plan.stiffness_constraints.iter().enumerate() {
@@ -761,6 +937,58 @@ fn editor(ui: &mut egui::Ui, forms: &mut Forms, plan: &Plan, sel: Entity, acts: 
                     acts.push(Act::Resize(id, forms.z_min, forms.z_max));
                 }
             });
+            ui.horizontal(|ui| {
+                ui.label("at z");
+                ui.add(egui::DragValue::new(&mut forms.split_z).speed(0.05));
+                if ui.button("Split at height").clicked() {
+                    acts.push(Act::SplitAt(id, forms.split_z));
+                }
+            });
+            ui.horizontal(|ui| {
+                ui.label("line");
+                for v in &mut forms.split_line {
+                    ui.add(egui::DragValue::new(v).speed(0.1).max_decimals(3));
+                }
+            });
+            if ui.button("Split by line").clicked() {
+                let l = forms.split_line;
+                acts.push(Act::SplitLine(
+                    id,
+                    glam::DVec2::new(l[0], l[1]),
+                    glam::DVec2::new(l[2], l[3]),
+                ));
+            }
+            let owner = relations::mf(plan, id).map(|f| f.owner);
+            let same_owner: Vec<thinplan_plan::MachiningFeatureId> = plan
+                .machining_features
+                .iter()
+                .filter(|f| Some(f.owner) == owner && f.id != id)
+                .map(|f| f.id)
+                .collect();
+            if forms.merge_with.is_none_or(|m| !same_owner.contains(&m)) {
+                forms.merge_with = same_owner.first().copied();
+            }
+            ui.horizontal(|ui| {
+                ui.label("merge with");
+                egui::ComboBox::from_id_salt("merge with")
+                    .selected_text(forms.merge_with.map_or("—".into(), |m| m.to_string()))
+                    .show_ui(ui, |ui| {
+                        for m in &same_owner {
+                            ui.selectable_value(&mut forms.merge_with, Some(*m), m.to_string());
+                        }
+                    });
+                if ui
+                    .add_enabled(forms.merge_with.is_some(), egui::Button::new("Merge"))
+                    .clicked()
+                {
+                    if let Some(m) = forms.merge_with {
+                        acts.push(Act::Merge(id, m));
+                    }
+                }
+            });
+            if let Some(o) = owner {
+                drawing::draw_section(ui, forms, plan, o, acts);
+            }
         }
         Entity::Operation(id) => {
             ui.label(RichText::new("Edit").strong());
@@ -790,7 +1018,203 @@ enum Act {
     AddConstraint(StiffnessFeatureId, StiffnessFeatureId, ConstraintKind),
     RemoveConstraint(usize),
     Resize(thinplan_plan::MachiningFeatureId, f64, f64),
+    SplitAt(thinplan_plan::MachiningFeatureId, f64),
+    SplitLine(thinplan_plan::MachiningFeatureId, glam::DVec2, glam::DVec2),
+    Merge(
+        thinplan_plan::MachiningFeatureId,
+        thinplan_plan::MachiningFeatureId,
+    ),
+    Draw(StiffnessFeatureId, Vec<glam::DVec2>, f64, f64),
     Spindle(thinplan_plan::OperationId, f64),
+}
+
+/// A file name stem for exports from a part source (`builtin:wing_rib`,
+/// `dir/part.step` → `wing_rib`, `part`).
+fn export_stem(source: &str) -> String {
+    let name = source.trim_start_matches("builtin:");
+    let file = std::path::Path::new(name)
+        .file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_else(|| "part".into());
+    file.split('.')
+        .next()
+        .filter(|s| !s.is_empty())
+        .unwrap_or("part")
+        .to_string()
+}
+
+/// The bounding box of a loop's vertices.
+fn profile_box(l: &thinplan_plan::ProfileLoop) -> (glam::DVec2, glam::DVec2) {
+    let mut lo = glam::DVec2::splat(f64::INFINITY);
+    let mut hi = glam::DVec2::splat(f64::NEG_INFINITY);
+    for v in &l.vertices {
+        lo = lo.min(glam::DVec2::new(v.x, v.y));
+        hi = hi.max(glam::DVec2::new(v.x, v.y));
+    }
+    if !lo.is_finite() {
+        return (glam::DVec2::ZERO, glam::DVec2::ZERO);
+    }
+    (lo, hi)
+}
+
+/// The inspector's section for drawing a free-shaped machining feature:
+/// a plan view of the owner's features where clicks add points, the
+/// points as text (typed or clicked), the z range along up.
+mod drawing {
+    use super::{Act, Forms};
+    use crate::edit;
+    use eframe::egui::{self, Color32, Pos2, Sense, Stroke};
+    use glam::{DVec2, DVec3};
+    use thinplan_plan::{Plan, StiffnessFeatureId};
+
+    fn setup_frame(plan: &Plan) -> thinplan_brep::Frame {
+        thinplan_brep::Frame::from_axis_ref(DVec3::ZERO, plan.setup.up, None)
+    }
+
+    /// The owner's machining features as outlines in the set-up's plan
+    /// view (arcs as chords).
+    fn outlines(plan: &Plan, owner: StiffnessFeatureId) -> Vec<Vec<DVec2>> {
+        let f = setup_frame(plan);
+        plan.machining_features
+            .iter()
+            .filter(|m| m.owner == owner)
+            .map(|m| {
+                let fr = &m.shape.frame;
+                let x = fr.x.normalize_or_zero();
+                let y = fr.z.normalize_or_zero().cross(x);
+                crate::scene::loop_points(&m.shape.region.outer)
+                    .into_iter()
+                    .map(|p| {
+                        let w = fr.origin + x * p.x + y * p.y;
+                        DVec2::new(w.dot(f.x), w.dot(f.y))
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The z range (along up) the owner's features span; else the part's.
+    pub fn plan_z_range(plan: &Plan, owner: StiffnessFeatureId) -> (f64, f64) {
+        let f = setup_frame(plan);
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for m in plan.machining_features.iter().filter(|m| m.owner == owner) {
+            let o = m.shape.frame.origin.dot(f.z);
+            let s = m.shape.frame.z.normalize_or_zero().dot(f.z);
+            for z in [o + s * m.shape.z_min, o + s * m.shape.z_max] {
+                lo = lo.min(z);
+                hi = hi.max(z);
+            }
+        }
+        if lo.is_finite() && hi > lo {
+            (lo, hi)
+        } else {
+            (0.0, 1.0)
+        }
+    }
+
+    pub fn draw_section(
+        ui: &mut egui::Ui,
+        forms: &mut Forms,
+        plan: &Plan,
+        owner: StiffnessFeatureId,
+        acts: &mut Vec<Act>,
+    ) {
+        egui::CollapsingHeader::new(format!("Draw a machining feature of {owner}"))
+            .id_salt("draw")
+            .show(ui, |ui| {
+                let shapes = outlines(plan, owner);
+                let points = edit::parse_points(&forms.draw_text);
+                let typed: &[DVec2] = points.as_deref().unwrap_or(&[]);
+                let (mut lo, mut hi) =
+                    (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+                for p in shapes.iter().flatten().chain(typed) {
+                    lo = lo.min(*p);
+                    hi = hi.max(*p);
+                }
+                if !lo.is_finite() {
+                    let b = plan.part.summary.bbox;
+                    (lo, hi) = (DVec2::ZERO, DVec2::new(b[0].max(1.0), b[1].max(1.0)));
+                }
+                let pad = (hi - lo).max_element() * 0.1 + 1.0;
+                (lo, hi) = (lo - DVec2::splat(pad), hi + DVec2::splat(pad));
+                let (rect, resp) = ui.allocate_exact_size(
+                    egui::vec2(ui.available_width().min(300.0), 180.0),
+                    Sense::click(),
+                );
+                let scale = ((rect.width() as f64) / (hi.x - lo.x))
+                    .min((rect.height() as f64) / (hi.y - lo.y));
+                let to_screen = |p: DVec2| {
+                    Pos2::new(
+                        rect.min.x + ((p.x - lo.x) * scale) as f32,
+                        rect.max.y - ((p.y - lo.y) * scale) as f32,
+                    )
+                };
+                let painter = ui.painter_at(rect);
+                painter.rect_filled(rect, 2.0, ui.visuals().extreme_bg_color);
+                for s in &shapes {
+                    let pts: Vec<Pos2> = s.iter().map(|p| to_screen(*p)).collect();
+                    painter.add(egui::Shape::closed_line(
+                        pts,
+                        Stroke::new(1.0, Color32::from_rgb(120, 140, 170)),
+                    ));
+                }
+                let pts: Vec<Pos2> = typed.iter().map(|p| to_screen(*p)).collect();
+                if pts.len() > 1 {
+                    painter.add(egui::Shape::closed_line(
+                        pts.clone(),
+                        Stroke::new(1.5, Color32::from_rgb(255, 200, 40)),
+                    ));
+                }
+                for p in &pts {
+                    painter.circle_filled(*p, 2.5, Color32::from_rgb(255, 200, 40));
+                }
+                if let Some(c) = resp.interact_pointer_pos().filter(|_| resp.clicked()) {
+                    // Clicks snap to 0.1 mm in the set-up frame.
+                    let x = ((c.x - rect.min.x) as f64 / scale + lo.x) * 10.0;
+                    let y = ((rect.max.y - c.y) as f64 / scale + lo.y) * 10.0;
+                    let sep = if forms.draw_text.trim().is_empty() {
+                        ""
+                    } else {
+                        "; "
+                    };
+                    forms.draw_text = format!(
+                        "{}{sep}{:.1}, {:.1}",
+                        forms.draw_text.trim().trim_end_matches(';'),
+                        x.round() / 10.0,
+                        y.round() / 10.0
+                    );
+                }
+                ui.label("points (x, y; … in the set-up's plan view, mm): click above or type");
+                ui.add(egui::TextEdit::singleline(&mut forms.draw_text).id_salt("draw points"));
+                ui.horizontal(|ui| {
+                    ui.label("z from");
+                    ui.add(egui::DragValue::new(&mut forms.draw_z.0).speed(0.05));
+                    ui.label("to");
+                    ui.add(egui::DragValue::new(&mut forms.draw_z.1).speed(0.05));
+                });
+                ui.horizontal(|ui| {
+                    if ui.button("Clear points").clicked() {
+                        forms.draw_text.clear();
+                    }
+                    match &points {
+                        Ok(p) => {
+                            if ui.button("Add drawn feature").clicked() {
+                                acts.push(Act::Draw(
+                                    owner,
+                                    p.clone(),
+                                    forms.draw_z.0,
+                                    forms.draw_z.1,
+                                ));
+                            }
+                        }
+                        Err(e) => {
+                            ui.colored_label(Color32::LIGHT_RED, e);
+                        }
+                    }
+                });
+            });
+    }
 }
 
 /// The tree as a flat list of visible rows `(depth, entity, has children)`,

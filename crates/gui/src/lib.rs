@@ -6,6 +6,7 @@
 //! `thinplan-sequence`'s cycle check.
 
 pub mod app;
+pub mod edit;
 pub mod network;
 pub mod relations;
 pub mod render;

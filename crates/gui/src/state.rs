@@ -613,9 +613,76 @@ impl AppState {
         })
     }
 
+    /// A machining-feature edit: operations and order recompute (resolve
+    /// too when it has not run yet); a refusal (a cycle) is shown as one.
+    /// The features the edit made or changed are selected and highlighted.
+    fn mf_edit(
+        &mut self,
+        label: &str,
+        f: impl FnOnce(&mut Plan) -> Result<Vec<MachiningFeatureId>, String>,
+    ) -> bool {
+        let mut made = Vec::new();
+        let ok = self.edit(label, |plan| {
+            let from = crate::edit::invalidated_from(plan);
+            made = f(plan)?;
+            Ok(from)
+        });
+        if ok {
+            if let Some(first) = made.first() {
+                self.select(Some(Entity::Machining(*first)));
+            }
+            self.highlight(made.iter().map(|i| Entity::Machining(*i)).collect());
+        } else if self.message.contains("refused") {
+            self.refusal = Some(self.message.clone());
+        }
+        ok
+    }
+
+    /// Splits a machining feature at height `z` of its sweep axis.
+    pub fn split_machining_at(&mut self, id: MachiningFeatureId, z: f64) -> bool {
+        self.mf_edit(&format!("split {id} at z {z:.3}"), |plan| {
+            crate::edit::split_at_height(plan, id, z)
+        })
+    }
+
+    /// Splits a machining feature by the line through `p` and `q` (its
+    /// profile's coordinates).
+    pub fn split_machining_by_line(
+        &mut self,
+        id: MachiningFeatureId,
+        p: glam::DVec2,
+        q: glam::DVec2,
+    ) -> bool {
+        self.mf_edit(&format!("split {id} by a line"), |plan| {
+            crate::edit::split_by_line(plan, id, p, q)
+        })
+    }
+
+    /// Merges two adjacent machining features of one owner.
+    pub fn merge_machining(&mut self, a: MachiningFeatureId, b: MachiningFeatureId) -> bool {
+        self.mf_edit(&format!("merge {a} and {b}"), |plan| {
+            crate::edit::merge(plan, a, b).map(|m| vec![m])
+        })
+    }
+
+    /// A new machining feature of `owner` from a profile drawn in the
+    /// set-up's plan view.
+    pub fn add_drawn_machining(
+        &mut self,
+        owner: StiffnessFeatureId,
+        points: &[glam::DVec2],
+        z_min: f64,
+        z_max: f64,
+    ) -> bool {
+        self.mf_edit(&format!("draw a machining feature of {owner}"), |plan| {
+            crate::edit::add_drawn(plan, owner, points, z_min, z_max).map(|m| vec![m])
+        })
+    }
+
     /// Resizes a machining feature along its sweep axis.
     pub fn resize_machining(&mut self, id: MachiningFeatureId, z_min: f64, z_max: f64) -> bool {
         self.edit(&format!("{id} z {z_min:.3}–{z_max:.3}"), |plan| {
+            let from = crate::edit::invalidated_from(plan);
             if !(z_min.is_finite() && z_max.is_finite() && z_max > z_min) {
                 return Err(format!("z range {z_min}–{z_max} is empty"));
             }
@@ -625,12 +692,12 @@ impl AppState {
                 .find(|f| f.id == id)
                 .ok_or_else(|| format!("no {id}"))?;
             if (f.shape.z_min, f.shape.z_max) == (z_min, z_max) {
-                return Ok(Stage::Resolve);
+                return Ok(from);
             }
             f.shape.z_min = z_min;
             f.shape.z_max = z_max;
             f.provenance = user_edit("gui.edit.resize", &f.provenance, None);
-            Ok(Stage::Resolve)
+            Ok(from)
         })
     }
 
@@ -669,6 +736,69 @@ impl AppState {
                 false
             }
         }
+    }
+
+    /// Exports the planned program through knowledge's post `post_id`
+    /// (the set-up's tool set) and the setup sheet, the same functions
+    /// `thinplan plan --gcode --sheet` calls; each file is written
+    /// atomically and nothing is written when posting fails.
+    pub fn export(&mut self, gcode: &Path, sheet: Option<&Path>, post_id: &str) -> bool {
+        match self.try_export(gcode, sheet, post_id) {
+            Ok(m) => {
+                self.message = m;
+                true
+            }
+            Err(e) => {
+                self.message = format!("export: {e}");
+                false
+            }
+        }
+    }
+
+    fn try_export(
+        &self,
+        gcode: &Path,
+        sheet: Option<&Path>,
+        post_id: &str,
+    ) -> Result<String, String> {
+        if self.is_running() {
+            return Err("a stage is running: export when it ends".into());
+        }
+        let s = self.session.as_ref().ok_or("no part open")?;
+        let plan = &s.plan;
+        if !plan.stages_done.contains(&Stage::Order) {
+            return Err("the plan has no ordered operations yet: run all stages first".into());
+        }
+        let k = &s.knowledge;
+        let post = k.post(post_id).ok_or_else(|| {
+            let known: Vec<&str> = k.posts.keys().map(String::as_str).collect();
+            format!(
+                "unknown post `{post_id}` in knowledge {} (known: {})",
+                k.origin,
+                known.join(", ")
+            )
+        })?;
+        let tools = k.tool_set(&plan.setup.tool_set).ok_or_else(|| {
+            format!(
+                "the plan's tool set `{}` is not in knowledge {}",
+                plan.setup.tool_set, k.origin
+            )
+        })?;
+        let program = thinplan_post::post(plan, post, tools)
+            .map_err(|e| format!("cannot post with `{post_id}`: {e}"))?;
+        thinplan_plan::io::write_atomic(gcode, program.text.as_bytes())
+            .map_err(|e| format!("{}: cannot write the program: {e}", gcode.display()))?;
+        let mut m = format!(
+            "wrote {} ({} lines, {} tool changes)",
+            gcode.display(),
+            program.line_count,
+            program.tool_changes
+        );
+        if let Some(path) = sheet {
+            thinplan_sheet::write_sheet(path, plan, k, &s.brep, &s.warnings)?;
+            m.push_str(&format!(" and {}", path.display()));
+        }
+        Ok(m)
     }
 
     /// Opens a saved plan: its part is imported again from its source and

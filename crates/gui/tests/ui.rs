@@ -264,3 +264,202 @@ fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
         }
     }
 }
+
+fn volume_of(plan: &thinplan_plan::Plan, ids: &[thinplan_plan::MachiningFeatureId]) -> f64 {
+    ids.iter()
+        .map(|id| {
+            let f = relations::mf(plan, *id).expect("feature");
+            thinplan_gui::edit::prism_volume(&f.shape)
+        })
+        .sum()
+}
+
+#[test]
+fn machining_feature_edits_are_undoable_and_volumes_add_up() {
+    let mut h = harness("builtin:tall_rib");
+    run_all(&mut h);
+    let plan = h.state().state.plan().unwrap().clone();
+    // The largest feature: room for a split at mid-height and by a line.
+    let f = plan
+        .machining_features
+        .iter()
+        .max_by(|a, b| {
+            let (va, vb) = (
+                thinplan_gui::edit::prism_volume(&a.shape),
+                thinplan_gui::edit::prism_volume(&b.shape),
+            );
+            va.total_cmp(&vb).then(b.id.cmp(&a.id))
+        })
+        .unwrap()
+        .clone();
+    let v0 = volume_of(&plan, &[f.id]);
+    let n0 = plan.machining_features.len();
+    let before = plan_bytes(&h);
+    h.state_mut().state.select(Some(Entity::Machining(f.id)));
+    h.run_steps(2);
+
+    // Split at height through the inspector (the form holds mid-height).
+    h.get_by_label("Split at height").click();
+    h.run_steps(2);
+    let split = h.state().state.plan().unwrap().clone();
+    assert_eq!(
+        split.machining_features.len(),
+        n0 + 1,
+        "{}",
+        h.state().state.message
+    );
+    let new_id = split.machining_features.last().unwrap().id;
+    assert!((volume_of(&split, &[f.id, new_id]) - v0).abs() < 1e-9 * v0.max(1.0));
+    // Only what is downstream of machining features is invalidated.
+    assert!(split.stages_done.contains(&Stage::Resolve));
+    assert!(!split.stages_done.contains(&Stage::Operations));
+    assert!(split.operations.is_empty() && split.operation_order.is_empty());
+    let edited = plan_bytes(&h);
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == before, "undo restores the plan exactly");
+    h.get_by_label("Redo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == edited, "redo re-applies the split");
+
+    // Merge the two parts back: one feature, the original volume.
+    assert!(
+        h.state_mut().state.merge_machining(f.id, new_id),
+        "{}",
+        h.state().state.message
+    );
+    let merged = h.state().state.plan().unwrap().clone();
+    assert_eq!(merged.machining_features.len(), n0);
+    assert!((volume_of(&merged, &[f.id]) - v0).abs() < 1e-9 * v0.max(1.0));
+    let g = relations::mf(&merged, f.id).unwrap();
+    assert_eq!(
+        (g.shape.z_min, g.shape.z_max),
+        (f.shape.z_min, f.shape.z_max)
+    );
+    assert!(h.state_mut().state.undo());
+
+    // Split by a line through the inspector (the form holds a line across
+    // the middle of the profile).
+    assert!(h.state_mut().state.undo());
+    assert!(plan_bytes(&h) == before);
+    h.state_mut().state.select(None);
+    h.run_steps(1);
+    h.state_mut().state.select(Some(Entity::Machining(f.id)));
+    h.run_steps(2);
+    h.get_by_label("Split by line").click();
+    h.run_steps(2);
+    let by_line = h.state().state.plan().unwrap().clone();
+    // The original id and the new ones.
+    let pieces: Vec<_> = by_line
+        .machining_features
+        .iter()
+        .filter(|m| m.id == f.id || !plan.machining_features.iter().any(|o| o.id == m.id))
+        .map(|m| m.id)
+        .collect();
+    assert!(pieces.len() >= 2, "{}", h.state().state.message);
+    assert!((volume_of(&by_line, &pieces) - v0).abs() < 1e-6 * v0.max(1.0));
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == before);
+
+    // A drawn profile becomes a new feature of the wall; undo removes it.
+    let owner = f.owner;
+    let pts: Vec<glam::DVec2> = thinplan_gui::edit::parse_points("0,0; 4,0; 4,3; 0,3").unwrap();
+    assert!(h
+        .state_mut()
+        .state
+        .add_drawn_machining(owner, &pts, 0.0, 2.0));
+    // A frame first: the top bar's widgets move when the stages do.
+    h.run_steps(2);
+    let drawn = h.state().state.plan().unwrap().clone();
+    let d = drawn.machining_features.last().unwrap();
+    assert_eq!(d.owner, owner);
+    assert!((thinplan_gui::edit::prism_volume(&d.shape) - 24.0).abs() < 1e-9);
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert!(
+        plan_bytes(&h) == before,
+        "{} / undo {:?} redo {:?}",
+        h.state().state.message,
+        h.state().state.history.undo_label(),
+        h.state().state.history.redo_label()
+    );
+
+    // After a split the invalidated stages run again on the edited features.
+    assert!(h
+        .state_mut()
+        .state
+        .split_machining_at(f.id, 0.5 * (f.shape.z_min + f.shape.z_max)));
+    h.run_steps(2);
+    run_all(&mut h);
+    let rerun = h.state().state.plan().unwrap().clone();
+    assert!(
+        rerun.stages_done.contains(&Stage::Order),
+        "{}",
+        h.state().state.message
+    );
+    assert_eq!(rerun.machining_features.len(), n0 + 1, "features kept");
+}
+
+#[test]
+fn export_writes_gcode_that_parses_and_a_sheet_naming_every_operation() {
+    let mut h = harness("builtin:tall_rib");
+    let dir = std::env::temp_dir().join(format!("thinplan-gui-export-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let (gcode, sheet) = (dir.join("tall_rib.ngc"), dir.join("tall_rib.sheet.html"));
+    h.state_mut().set_export_paths(&gcode, &sheet);
+    // Before the stages have run there is nothing to export.
+    assert!(!h.state_mut().state.export(&gcode, Some(&sheet), "linuxcnc"));
+    assert!(!gcode.exists());
+    run_all(&mut h);
+    h.get_by_label("Export").click();
+    h.run_steps(2);
+    h.get_by_label("Export G-code and sheet").click();
+    h.run_steps(2);
+    assert!(gcode.exists(), "{}", h.state().state.message);
+    let text = std::fs::read_to_string(&gcode).unwrap();
+    let program = thinplan_stocksim::parse(&text, "tall_rib.ngc").expect("the G-code parses");
+    assert!(!program.moves.is_empty() && program.ended);
+    let html = std::fs::read_to_string(&sheet).unwrap();
+    let plan = h.state().state.plan().unwrap().clone();
+    assert!(!plan.operations.is_empty());
+    for o in &plan.operations {
+        assert!(html.contains(&o.id.to_string()), "{} missing", o.id);
+    }
+    // Atomic writes leave no temporary files beside them.
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+    // The same program as the post function gives directly (same bytes).
+    let st = &h.state().state;
+    let k = st.knowledge().unwrap();
+    let direct = thinplan_post::post(
+        &plan,
+        k.post("linuxcnc").unwrap(),
+        k.tool_set(&plan.setup.tool_set).unwrap(),
+    )
+    .unwrap();
+    assert!(direct.text == text);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_part_opens_through_the_file_picker() {
+    let mut h = harness("builtin:tall_rib");
+    h.get_by_label("Browse…").click();
+    h.run_steps(3);
+    // The picker starts in the bundled parts folder.
+    h.get_by_label_contains("crossing_ribs.part.ron").click();
+    h.run_steps(2);
+    h.get_by_label("🗀  Open").click();
+    h.run_steps(3);
+    let src = h.state().state.plan().unwrap().part.source.clone();
+    assert!(
+        src.ends_with("crossing_ribs.part.ron"),
+        "{src}: {}",
+        h.state().state.message
+    );
+}
