@@ -61,6 +61,8 @@ struct Geometry {
     /// Boundaries of the free space around the feature (other product the
     /// tool must keep r from, see `free.rs`).
     keep_out: Vec<Edge2>,
+    /// The region was clipped to the free space (straight edges only).
+    clipped: bool,
 }
 
 fn sides_class(edges: &[(Vec<Edge2>, Vec<Adjacency>)]) -> SidesMatch {
@@ -130,6 +132,15 @@ fn geometry(
                 .collect()
         })
         .unwrap_or_default();
+    // Straight-edged features with a known free space (every resolved
+    // feature): the moved region is clipped to the free space below, so the
+    // overhang needs no per-edge clearance. Otherwise (arcs, synthetic
+    // plans) each edge's overhang is capped by the room beyond it.
+    let clip = free.filter(|_| {
+        edges
+            .iter()
+            .all(|(es, _)| es.iter().all(|e| e.bulge == 0.0))
+    });
     let mut loops = Vec::new();
     for (k, (es, adj)) in edges.iter().enumerate() {
         // Tool edge may pass `overhang·D` beyond a non-product edge: the
@@ -145,7 +156,11 @@ fn geometry(
                 };
                 // Never so far that the tool reaches product beyond the
                 // edge (an open edge may face a narrow strip beside a wall).
-                wanted.min(clearance(e, &keep_out))
+                if clip.is_some() {
+                    wanted
+                } else {
+                    wanted.min(clearance(e, &keep_out))
+                }
             })
             .collect();
         for (e, a) in es.iter().zip(adj) {
@@ -174,8 +189,16 @@ fn geometry(
     if loops.is_empty() {
         return None;
     }
+    if let Some(free) = clip {
+        loops = clipped_to_free(&loops, free, &product_strips(&edges), d);
+        if loops.is_empty() {
+            return None;
+        }
+    }
     let shape = Shape::from_plines(loops);
-    let centre = Area::from_shape(shape.parallel_offset(r, &ShapeOffsetOptions::default()));
+    // The clipped loops carry the overlay's rounding (well under 1e-6 mm).
+    let slack = if clip.is_some() { clip_slack(r) } else { 0.0 };
+    let centre = Area::from_shape(shape.parallel_offset(r + slack, &ShapeOffsetOptions::default()));
     if centre.is_empty() {
         return None;
     }
@@ -195,7 +218,144 @@ fn geometry(
         region_polys,
         product,
         keep_out,
+        clipped: clip.is_some(),
     })
+}
+
+/// The polygons less every point closer than `reach` to a product edge
+/// (each edge's capsule, circumscribed so the cut is never too small).
+fn away_from_product(polys: &[Vec<DVec2>], product: &[Edge2], reach: f64) -> Vec<Vec<DVec2>> {
+    use i_overlay::core::fill_rule::FillRule;
+    use i_overlay::core::overlay_rule::OverlayRule;
+    use i_overlay::float::single::SingleFloatOverlay;
+    if product.is_empty() {
+        return polys.to_vec();
+    }
+    let subject: Vec<Vec<[f64; 2]>> = polys
+        .iter()
+        .map(|p| p.iter().map(|q| [q.x, q.y]).collect())
+        .collect();
+    const HALF: usize = 16;
+    let rho = reach / (std::f64::consts::PI / (2.0 * HALF as f64)).cos();
+    let capsules: Vec<Vec<[f64; 2]>> = product
+        .iter()
+        .filter(|e| e.a.distance_squared(e.b) > 1e-18)
+        .map(|e| {
+            let t = (e.b - e.a).normalize();
+            let a0 = t.perp().to_angle();
+            let mut c = Vec::with_capacity(2 * HALF + 2);
+            // Around b from +perp to -perp (clockwise side first), then a.
+            for (centre, start) in [(e.b, a0 - std::f64::consts::PI), (e.a, a0)] {
+                for k in 0..=HALF {
+                    let ang = start + std::f64::consts::PI * k as f64 / HALF as f64;
+                    let q = centre + DVec2::from_angle(ang) * rho;
+                    c.push([q.x, q.y]);
+                }
+            }
+            c
+        })
+        .collect();
+    let out: crate::free::Shapes =
+        subject.overlay_as::<i64>(&capsules, OverlayRule::Difference, FillRule::NonZero);
+    out.into_iter()
+        .flatten()
+        .filter(|c| c.len() >= 3)
+        .map(|c| c.into_iter().map(|q| DVec2::new(q[0], q[1])).collect())
+        .collect()
+}
+
+/// Thin strips just beyond every product edge (on its outward side, a
+/// little longer than the edge): cut from the moved region, the offset then
+/// keeps the tool centre r from each product edge even where a moved
+/// neighbour shortened it or a narrow hole moved past itself.
+fn product_strips(edges: &[(Vec<Edge2>, Vec<Adjacency>)]) -> Vec<Vec<[f64; 2]>> {
+    let e = PRODUCT_STRIP;
+    let mut v = Vec::new();
+    for (es, adj) in edges {
+        for (edge, a) in es.iter().zip(adj) {
+            if *a != Adjacency::Product || edge.a.distance_squared(edge.b) < 1e-18 {
+                continue;
+            }
+            let t = (edge.b - edge.a).normalize();
+            let n = DVec2::new(t.y, -t.x);
+            let (p, q) = (edge.a - t * e, edge.b + t * e);
+            v.push(
+                [p, q, q + n * e, p + n * e]
+                    .iter()
+                    .map(|c| [c.x, c.y])
+                    .collect(),
+            );
+        }
+    }
+    v
+}
+
+/// Width (mm) of the strip cut beyond a product edge: the offset by r then
+/// keeps the tool centre at least r from the edge and its ends.
+const PRODUCT_STRIP: f64 = 1e-3;
+
+/// Extra inward offset (mm) of a region clipped to the free space: the
+/// overlay's integer rounding, and the chords of the sampled polygons the
+/// passes are built on where the region bends round an obstacle (sagitta
+/// of a 0.25 mm chord on a radius of at least r).
+fn clip_slack(r: f64) -> f64 {
+    1e-4 + STEP * STEP / (8.0 * r.max(STEP))
+}
+
+/// The moved region (straight loops, outer ccw, holes cw) intersected with
+/// the free space, less the strips beyond product edges; as
+/// cavalier loops with the same orientation convention.
+fn clipped_to_free(
+    loops: &[cavalier_contours::polyline::Polyline<f64>],
+    free: &crate::free::Shapes,
+    strips: &[Vec<[f64; 2]>],
+    d: f64,
+) -> Vec<cavalier_contours::polyline::Polyline<f64>> {
+    use cavalier_contours::polyline::{PlineCreation, PlineSourceMut, Polyline};
+    use i_overlay::core::fill_rule::FillRule;
+    use i_overlay::core::overlay_rule::OverlayRule;
+    use i_overlay::float::single::SingleFloatOverlay;
+    let subject: Vec<Vec<[f64; 2]>> = loops
+        .iter()
+        .map(|p| {
+            (0..p.vertex_count())
+                .map(|i| {
+                    let v = p.at(i);
+                    [v.x, v.y]
+                })
+                .collect()
+        })
+        .collect();
+    // Outer ccw and holes cw: non-zero winding is the region.
+    let region: crate::free::Shapes = subject.overlay_as::<i64>(
+        &Vec::<Vec<[f64; 2]>>::new(),
+        OverlayRule::Subject,
+        FillRule::NonZero,
+    );
+    let mut within: crate::free::Shapes =
+        region.overlay_as::<i64>(free, OverlayRule::Intersect, FillRule::NonZero);
+    if !strips.is_empty() {
+        let strips: Vec<Vec<[f64; 2]>> = strips.to_vec();
+        within = within.overlay_as::<i64>(&strips, OverlayRule::Difference, FillRule::NonZero);
+    }
+    let mut out = Vec::new();
+    for shape in &within {
+        for (k, c) in shape.iter().enumerate() {
+            if c.len() < 3 {
+                continue;
+            }
+            let mut p = Polyline::with_capacity(c.len(), true);
+            for q in c {
+                p.add(q[0], q[1], 0.0);
+            }
+            // Slivers far thinner than the tool vanish in the offset anyway.
+            if p.area().abs() < 1e-9 * d * d {
+                continue;
+            }
+            out.push(oriented(p, k == 0));
+        }
+    }
+    out
 }
 
 /// Room beyond an edge (on its outward, right-hand side) before the free
@@ -678,12 +838,16 @@ pub(crate) fn feature_operations(
         _ => feed_rough,
     };
     let s_b = boundary.map_or(0.0, |b| b.stepover * d);
-    let rest_area = if s_b > 0.0 {
-        g.centre.offset(s_b)
+    // The rest region keeps s_b from the boundary passes only: shrinking
+    // it from every side would leave a band along non-product sides that
+    // no pass visits (a narrow step beside a wall lost its far side).
+    let rest_polys = if s_b > 0.0 && g.clipped {
+        away_from_product(&g.centre_polys, &g.product, g.r + s_b)
+    } else if s_b > 0.0 {
+        g.centre.offset(s_b).polygons(STEP)
     } else {
-        g.centre.clone()
+        g.centre_polys.clone()
     };
-    let rest_polys = rest_area.polygons(STEP);
     let chains = match boundary {
         Some(_) => boundary_chains(&g, 0.5 * s_b.max(1e-3), mk.spindle),
         None => Vec::new(),
@@ -1185,7 +1349,37 @@ fn enter(
         }
         let _ = spiral_start;
     }
-    ramp(b, block, z_from, z, angle, 0.02 * d, kind)
+    let min_len = 0.02 * d;
+    if ramp(b, block, z_from, z, angle, min_len, kind).is_some() {
+        return Some(());
+    }
+    // The block is too short to ramp along (a small rest region): ramp back
+    // and forth along the longest straight run from its start that stays in
+    // the tool-centre region, the direction found among 24.
+    let p0 = block[0];
+    let need = (z_from - z) / angle.tan();
+    let (mut best, mut best_len) = (p0, 0.0);
+    for k in 0..24 {
+        let u = DVec2::from_angle(std::f64::consts::TAU * k as f64 / 24.0);
+        let (mut lo, mut hi) = (0.0, need.max(min_len));
+        if segment_inside(p0, p0 + u * hi, &g.centre_polys, STEP / 2.0) {
+            lo = hi;
+        } else {
+            for _ in 0..20 {
+                let mid = 0.5 * (lo + hi);
+                if segment_inside(p0, p0 + u * mid, &g.centre_polys, STEP / 2.0) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+        }
+        if lo > best_len + 1e-9 {
+            best_len = lo;
+            best = p0 + u * lo;
+        }
+    }
+    ramp(b, &[p0, best], z_from, z, angle, min_len, kind)
 }
 
 /// The boundary passes of one z-level, stacked where the z-level is deeper
