@@ -258,14 +258,45 @@ pub fn layout_graph(ents: &[Entity], cons: &[(Entity, Entity, ConstraintKind)]) 
     }
 }
 
+/// Below this node height on screen (px) the nodes are drawn as plain
+/// quads in one mesh, without rounding, outlines, arrowheads or text: at
+/// that size they are a few pixels and ten thousand of them would
+/// otherwise cost more than the rest of the frame.
+const LOD_NODE_PX: f32 = 8.0;
+
+/// What decides the picture: when none of it changed since the last frame
+/// the shapes drawn then are drawn again as they are.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct DrawKey {
+    plan_generation: u64,
+    style_generation: u64,
+    level: Level,
+    rect: Rect,
+    zoom: f32,
+    offset: Vec2,
+    dark: bool,
+}
+
+/// The shapes of the last frame with the member boxes on screen (for
+/// clicks and hover) and the entities drawn selected.
+struct Drawn {
+    key: DrawKey,
+    shapes: Vec<egui::Shape>,
+    hits: Vec<(Rect, Entity)>,
+    selected: Vec<Entity>,
+}
+
 /// The view's own state: level, pan and zoom, and the layout cache.
 pub struct NetworkView {
     pub level: Level,
     pub offset: Vec2,
     pub zoom: f32,
     cache: Option<(u64, Level, Layout)>,
+    drawn: Option<Drawn>,
     /// The entities drawn as selected in the last frame (tests read it).
     pub drawn_selected: Vec<Entity>,
+    /// How many frames reused the last frame's shapes (tests read it).
+    pub reused: u64,
     fit_pending: bool,
 }
 
@@ -276,10 +307,24 @@ impl Default for NetworkView {
             offset: Vec2::new(10.0, 10.0),
             zoom: 1.0,
             cache: None,
+            drawn: None,
             drawn_selected: Vec::new(),
+            reused: 0,
             fit_pending: true,
         }
     }
+}
+
+/// A straight band from `p` to `q`, `w` wide, as two triangles.
+fn add_band(mesh: &mut egui::Mesh, p: Pos2, q: Pos2, w: f32, col: Color32) {
+    let d = (q - p).normalized();
+    let n = Vec2::new(-d.y, d.x) * (w * 0.5);
+    let i = mesh.vertices.len() as u32;
+    for v in [p + n, q + n, q - n, p - n] {
+        mesh.colored_vertex(v, col);
+    }
+    mesh.add_triangle(i, i + 1, i + 2);
+    mesh.add_triangle(i, i + 2, i + 3);
 }
 
 impl NetworkView {
@@ -340,126 +385,184 @@ impl NetworkView {
                 self.zoom = (self.zoom * f).clamp(0.02, 4.0);
             }
         }
-        let (zoom, offset) = (self.zoom, self.offset);
-        let to_screen = |p: Pos2| rect.min + offset + p.to_vec2() * zoom;
         let Some(plan) = state.plan() else { return };
-        let selected = state.selection;
-        // What the selection relates to, shown on the nodes as well.
-        let related: BTreeSet<Entity> = match selected {
-            Some(Entity::Stiffness(_)) | Some(Entity::Machining(_)) => state.highlighted.clone(),
-            Some(e) => relations::owned(plan, e),
-            None => BTreeSet::new(),
+        let key = DrawKey {
+            plan_generation: state.plan_generation,
+            style_generation: state.style_generation,
+            level: self.level,
+            rect,
+            zoom: self.zoom,
+            offset: self.offset,
+            dark: ui.visuals().dark_mode,
         };
-        let visible = rect.expand(40.0);
-        let edge_col = ui
-            .visuals()
-            .widgets
-            .noninteractive
-            .fg_stroke
-            .color
-            .gamma_multiply(0.6);
-        for &(a, b) in &lay.edges {
-            let (na, nb) = (&lay.nodes[a], &lay.nodes[b]);
-            let p = to_screen(na.pos + Vec2::new(na.size.x * 0.5, na.size.y));
-            let q = to_screen(nb.pos + Vec2::new(nb.size.x * 0.5, 0.0));
-            if !visible.intersects(Rect::from_two_pos(p, q)) {
-                continue;
-            }
-            let hot = selected.is_some_and(|s| na.members.contains(&s) || nb.members.contains(&s));
-            let stroke = if hot {
-                Stroke::new(2.0, Color32::from_rgb(230, 140, 30))
-            } else {
-                Stroke::new(1.0, edge_col)
-            };
-            painter.line_segment([p, q], stroke);
-            let dir = (q - p).normalized();
-            let side = Vec2::new(-dir.y, dir.x) * 4.0;
-            painter.add(egui::Shape::convex_polygon(
-                vec![q, q - dir * 8.0 + side, q - dir * 8.0 - side],
-                stroke.color,
-                Stroke::NONE,
-            ));
+        if self.drawn.as_ref().is_some_and(|d| d.key == key) {
+            self.reused += 1;
+        } else {
+            self.drawn = Some(draw(ui, &painter, lay, plan, state, key));
         }
-        let mut drawn_selected = Vec::new();
-        let font = egui::FontId::proportional((11.0 * zoom).clamp(6.0, 16.0));
-        let text_col = ui.visuals().strong_text_color();
-        let mut clicked: Option<Entity> = None;
-        let click_pos = if resp.clicked() {
-            resp.interact_pointer_pos()
+        let drawn = self.drawn.as_ref().expect("drawn above");
+        painter.extend(drawn.shapes.iter().cloned());
+        self.drawn_selected = drawn.selected.clone();
+        let at = |p: Pos2| drawn.hits.iter().find(|(r, _)| r.contains(p)).map(|h| h.1);
+        if let Some(e) = resp.hover_pos().and_then(at) {
+            resp.clone().on_hover_text(relations::name(plan, e));
+        }
+        let clicked = if resp.clicked() {
+            resp.interact_pointer_pos().and_then(at)
         } else {
             None
         };
-        for nd in &lay.nodes {
-            let r = Rect::from_min_size(to_screen(nd.pos), nd.size * zoom);
-            if !visible.intersects(r) {
-                continue;
-            }
-            let group = nd.members.len() > 1;
-            let fill = if group {
-                Color32::from_rgb(70, 90, 120)
-            } else {
-                Color32::from_rgb(60, 70, 80)
-            };
-            painter.rect_filled(r, 3.0, fill);
-            if group {
-                painter.rect_stroke(
-                    r,
-                    3.0,
-                    Stroke::new(1.5, Color32::from_rgb(140, 180, 230)),
-                    egui::StrokeKind::Outside,
-                );
-            }
-            for (k, m) in nd.members.iter().enumerate() {
-                let mr = Rect::from_min_size(
-                    r.min + Vec2::new(k as f32 * MEMBER_W * zoom, 0.0),
-                    Vec2::new(MEMBER_W * zoom, NODE_H * zoom),
-                )
-                .shrink(2.0 * zoom);
-                let (col, width) = if Some(*m) == selected {
-                    drawn_selected.push(*m);
-                    (Color32::from_rgb(255, 200, 40), 2.5)
-                } else if related.contains(m) {
-                    (Color32::from_rgb(110, 210, 255), 2.0)
-                } else if state.changed.contains(m) {
-                    (Color32::from_rgb(120, 220, 120), 1.5)
-                } else {
-                    (Color32::TRANSPARENT, 0.0)
-                };
-                if width > 0.0 {
-                    painter.rect_stroke(mr, 2.0, Stroke::new(width, col), egui::StrokeKind::Inside);
-                }
-                if zoom > 0.3 {
-                    painter.text(
-                        mr.center(),
-                        egui::Align2::CENTER_CENTER,
-                        m.to_string(),
-                        font.clone(),
-                        text_col,
-                    );
-                }
-                if click_pos.is_some_and(|p| mr.contains(p)) {
-                    clicked = Some(*m);
-                }
-            }
-        }
-        self.drawn_selected = drawn_selected;
-        if let Some(p) = resp.hover_pos() {
-            for nd in &lay.nodes {
-                let r = Rect::from_min_size(to_screen(nd.pos), nd.size * zoom);
-                if r.contains(p) {
-                    let k =
-                        (((p.x - r.min.x) / (MEMBER_W * zoom)) as usize).min(nd.members.len() - 1);
-                    let text = relations::name(plan, nd.members[k]);
-                    resp.clone().on_hover_text(text);
-                    break;
-                }
-            }
-        }
         if let Some(e) = clicked {
             state.select(Some(e));
         } else if resp.clicked() {
             state.select(None);
         }
+    }
+}
+
+/// The shapes of the visible part of the network for `key`.
+fn draw(
+    ui: &egui::Ui,
+    painter: &egui::Painter,
+    lay: &Layout,
+    plan: &Plan,
+    state: &AppState,
+    key: DrawKey,
+) -> Drawn {
+    let DrawKey {
+        rect, zoom, offset, ..
+    } = key;
+    let to_screen = |p: Pos2| rect.min + offset + p.to_vec2() * zoom;
+    let selected = state.selection;
+    // What the selection relates to, shown on the nodes as well.
+    let related: BTreeSet<Entity> = match selected {
+        Some(Entity::Stiffness(_)) | Some(Entity::Machining(_)) => state.highlighted.clone(),
+        Some(e) => relations::owned(plan, e),
+        None => BTreeSet::new(),
+    };
+    let visible = rect.expand(40.0);
+    let edge_col = ui
+        .visuals()
+        .widgets
+        .noninteractive
+        .fg_stroke
+        .color
+        .gamma_multiply(0.6);
+    let lod = NODE_H * zoom < LOD_NODE_PX;
+    let mut shapes = Vec::new();
+    let mut mesh = egui::Mesh::default();
+    let mut hits = Vec::new();
+    let mut drawn_selected = Vec::new();
+    let hot_col = Color32::from_rgb(230, 140, 30);
+    for &(a, b) in &lay.edges {
+        let (na, nb) = (&lay.nodes[a], &lay.nodes[b]);
+        let p = to_screen(na.pos + Vec2::new(na.size.x * 0.5, na.size.y));
+        let q = to_screen(nb.pos + Vec2::new(nb.size.x * 0.5, 0.0));
+        if !visible.intersects(Rect::from_two_pos(p, q)) {
+            continue;
+        }
+        let hot = selected.is_some_and(|s| na.members.contains(&s) || nb.members.contains(&s));
+        let stroke = if hot {
+            Stroke::new(2.0, hot_col)
+        } else {
+            Stroke::new(1.0, edge_col)
+        };
+        if lod {
+            add_band(&mut mesh, p, q, stroke.width, stroke.color);
+            continue;
+        }
+        shapes.push(egui::Shape::line_segment([p, q], stroke));
+        let dir = (q - p).normalized();
+        let side = Vec2::new(-dir.y, dir.x) * 4.0;
+        shapes.push(egui::Shape::convex_polygon(
+            vec![q, q - dir * 8.0 + side, q - dir * 8.0 - side],
+            stroke.color,
+            Stroke::NONE,
+        ));
+    }
+    let font = egui::FontId::proportional((11.0 * zoom).clamp(6.0, 16.0));
+    let text_col = ui.visuals().strong_text_color();
+    let group_col = Color32::from_rgb(140, 180, 230);
+    for nd in &lay.nodes {
+        let r = Rect::from_min_size(to_screen(nd.pos), nd.size * zoom);
+        if !visible.intersects(r) {
+            continue;
+        }
+        let group = nd.members.len() > 1;
+        let fill = if group {
+            Color32::from_rgb(70, 90, 120)
+        } else {
+            Color32::from_rgb(60, 70, 80)
+        };
+        if lod {
+            if group {
+                mesh.add_colored_rect(r.expand(1.0), group_col);
+            }
+            mesh.add_colored_rect(r, fill);
+        } else {
+            shapes.push(egui::epaint::RectShape::filled(r, 3.0, fill).into());
+            if group {
+                shapes.push(
+                    egui::epaint::RectShape::stroke(
+                        r,
+                        3.0,
+                        Stroke::new(1.5, group_col),
+                        egui::StrokeKind::Outside,
+                    )
+                    .into(),
+                );
+            }
+        }
+        for (k, m) in nd.members.iter().enumerate() {
+            let mr = Rect::from_min_size(
+                r.min + Vec2::new(k as f32 * MEMBER_W * zoom, 0.0),
+                Vec2::new(MEMBER_W * zoom, NODE_H * zoom),
+            )
+            .shrink(2.0 * zoom);
+            hits.push((mr, *m));
+            let (col, width) = if Some(*m) == selected {
+                drawn_selected.push(*m);
+                (Color32::from_rgb(255, 200, 40), 2.5)
+            } else if related.contains(m) {
+                (Color32::from_rgb(110, 210, 255), 2.0)
+            } else if state.changed.contains(m) {
+                (Color32::from_rgb(120, 220, 120), 1.5)
+            } else {
+                (Color32::TRANSPARENT, 0.0)
+            };
+            if width > 0.0 {
+                if lod {
+                    // A few pixels: the mark fills the member's box.
+                    mesh.add_colored_rect(r.intersect(mr.expand(2.0 * zoom)), col);
+                } else {
+                    shapes.push(
+                        egui::epaint::RectShape::stroke(
+                            mr,
+                            2.0,
+                            Stroke::new(width, col),
+                            egui::StrokeKind::Inside,
+                        )
+                        .into(),
+                    );
+                }
+            }
+            if !lod && zoom > 0.3 {
+                let galley = painter.layout_no_wrap(m.to_string(), font.clone(), text_col);
+                let tr = egui::Align2::CENTER_CENTER.anchor_size(mr.center(), galley.size());
+                if !galley.is_empty() {
+                    shapes.push(egui::Shape::galley(tr.min, galley, text_col));
+                }
+            }
+        }
+    }
+    if !mesh.is_empty() {
+        shapes.push(egui::Shape::mesh(mesh));
+    }
+    Drawn {
+        key,
+        shapes,
+        hits,
+        selected: drawn_selected,
     }
 }
 
