@@ -178,13 +178,16 @@ pub fn violations(p: &[DVec3], caps: &[f64], limits: &MachineLimits, s: &Schedul
                 format!("tangential acceleration (dv/dt) on segment {i}")
             });
         }
-        // Per-axis acceleration, tangential plus normal, at both end points.
-        for (j, u) in [(i, v0 * v0), (i + 1, v1 * v1)] {
-            let c = g.curv[j];
+        // Per-axis acceleration, tangential plus normal, at both end points and inside the
+        // segment, where the model has the curvature vector and v² linear in s between the
+        // end points' values.
+        for sigma in [0.0, 0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0] {
+            let c = g.curv[i].lerp(g.curv[i + 1], sigma);
+            let u = v0 * v0 + (v1 * v1 - v0 * v0) * sigma;
             for k in 0..3 {
                 let acc = d[k] * a_s + c[k] * u;
                 rep.see(acc.abs() / limits.a_max[k], || {
-                    format!("axis {k} acceleration at point {j} (segment {i}): {acc}")
+                    format!("axis {k} acceleration at σ = {sigma} of segment {i}: {acc}")
                 });
             }
         }
