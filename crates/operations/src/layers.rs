@@ -817,9 +817,15 @@ pub(crate) fn feature_operations(
             .filter(|t| t.diameter / 2.0 <= ratio * rho)
             .collect();
         if small.is_empty() {
+            // The smallest tool leaves the least in those corners.
+            cands.sort_by(|a, b| {
+                a.diameter
+                    .total_cmp(&b.diameter)
+                    .then_with(|| a.id.cmp(&b.id))
+            });
             warnings.push(format!(
                 "{}: no tool is smaller than its smallest product corner (radius {rho:.3} mm); \
-                 material stays in those corners",
+                 the smallest that fits is used and material stays in those corners",
                 f.id
             ));
         } else {
@@ -932,9 +938,13 @@ pub(crate) fn feature_operations(
         .origin
         .dot(f.shape.frame.z.normalize_or_zero());
     let safe_z = (safe_z - up_off).max(z_top + mk.safe_clearance);
+    // Rapids stop at the top of the stock, not of the feature: material
+    // that features above leave (corners no tool reaches, refused
+    // features) may stand over this one; the rest of the way down is fed.
+    let rapid_floor = (env.global_top - up_off).clamp(z_top, safe_z);
     let space = Space {
         centre_region: &g.centre_polys,
-        z_top,
+        z_top: rapid_floor,
         safe_z,
         step: STEP,
     };

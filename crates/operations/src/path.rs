@@ -218,7 +218,7 @@ impl Builder {
 pub struct Space<'a> {
     /// The tool-centre region, sampled.
     pub centre_region: &'a [Vec<DVec2>],
-    /// Top of the feature (local z): air above.
+    /// Where rapids down end (local z): the top of the stock, air above.
     pub z_top: f64,
     /// Height of links that leave the tool-centre region.
     pub safe_z: f64,
