@@ -76,18 +76,26 @@ pub enum Picking {
 /// The file picker, filtered to parts (STEP or native `.part.ron`) or
 /// plans; it starts in the bundled parts folder when there is one.
 fn file_dialog(picking: Picking) -> egui_file_dialog::FileDialog {
+    use egui_file_dialog::Filter;
+    // By the whole name: `.part.ron` parts, not the `.labels.ron` beside them.
+    let ends = |suffixes: &'static [&'static str]| {
+        Filter::new(move |p: &std::path::Path| {
+            let name = p
+                .file_name()
+                .map(|n| n.to_string_lossy().to_lowercase())
+                .unwrap_or_default();
+            suffixes.iter().any(|s| name.ends_with(s))
+        })
+    };
     let d = egui_file_dialog::FileDialog::new();
     let d = match picking {
         Picking::Part => d
             .title("Open a part")
-            .add_file_filter_extensions(
-                "STEP or native part",
-                vec!["step", "stp", "STEP", "STP", "ron"],
-            )
+            .add_file_filter("STEP or native part", ends(&[".step", ".stp", ".part.ron"]))
             .default_file_filter("STEP or native part"),
         Picking::Plan => d
             .title("Open a plan")
-            .add_file_filter_extensions("plans", vec!["json", "ron"])
+            .add_file_filter("plans", ends(&[".plan.json", ".plan.ron"]))
             .default_file_filter("plans"),
     };
     let parts = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/parts");
@@ -278,6 +286,11 @@ impl ThinplanApp {
     pub fn set_export_paths(&mut self, gcode: &std::path::Path, sheet: &std::path::Path) {
         self.forms.gcode_path = gcode.display().to_string();
         self.forms.sheet_path = sheet.display().to_string();
+    }
+
+    /// Sets the drawn profile's points as if typed (`x, y; …`; tests).
+    pub fn set_draw_points(&mut self, text: &str) {
+        self.forms.draw_text = text.to_string();
     }
 
     fn open_part(&mut self, source: &str) {

@@ -362,19 +362,34 @@ fn machining_feature_edits_are_undoable_and_volumes_add_up() {
     h.run_steps(2);
     assert!(plan_bytes(&h) == before);
 
-    // A drawn profile becomes a new feature of the wall; undo removes it.
+    // A drawn profile becomes a new feature of the wall (typed points, the
+    // inspector's button); undo removes it.
     let owner = f.owner;
-    let pts: Vec<glam::DVec2> = thinplan_gui::edit::parse_points("0,0; 4,0; 4,3; 0,3").unwrap();
-    assert!(h
-        .state_mut()
-        .state
-        .add_drawn_machining(owner, &pts, 0.0, 2.0));
-    // A frame first: the top bar's widgets move when the stages do.
+    h.state_mut().state.select(Some(Entity::Stiffness(owner)));
+    h.run_steps(2);
+    h.get_by_label(&format!("Draw a machining feature of {owner}"))
+        .click();
+    // Until the header's opening animation has settled.
+    h.run();
+    h.state_mut().set_draw_points("0,0; 4,0; 4,3; 0,3");
+    h.run();
+    // The inspector scrolls: bring the button into view first.
+    h.get_by_label("Add drawn feature").scroll_to_me();
+    h.run();
+    h.get_by_label("Add drawn feature").click();
     h.run_steps(2);
     let drawn = h.state().state.plan().unwrap().clone();
+    assert_eq!(
+        drawn.machining_features.len(),
+        n0 + 1,
+        "{}",
+        h.state().state.message
+    );
     let d = drawn.machining_features.last().unwrap();
     assert_eq!(d.owner, owner);
-    assert!((thinplan_gui::edit::prism_volume(&d.shape) - 24.0).abs() < 1e-9);
+    let (lo, hi) = (d.shape.z_min, d.shape.z_max);
+    assert!(hi > lo);
+    assert!((thinplan_gui::edit::prism_volume(&d.shape) - 12.0 * (hi - lo)).abs() < 1e-9);
     h.get_by_label("Undo").click();
     h.run_steps(2);
     assert!(
@@ -451,7 +466,11 @@ fn a_part_opens_through_the_file_picker() {
     let mut h = harness("builtin:tall_rib");
     h.get_by_label("Browse…").click();
     h.run_steps(3);
-    // The picker starts in the bundled parts folder.
+    // The picker starts in the bundled parts folder, showing parts only
+    // (not the `.labels.ron` files beside them).
+    assert!(h
+        .query_by_label_contains("crossing_ribs.labels.ron")
+        .is_none());
     h.get_by_label_contains("crossing_ribs.part.ron").click();
     h.run_steps(2);
     h.get_by_label("🗀  Open").click();
