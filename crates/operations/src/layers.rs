@@ -42,7 +42,14 @@ pub(crate) struct LocalOp {
 pub(crate) struct Made {
     pub ops: Vec<LocalOp>,
     pub warnings: Vec<String>,
+    /// Material of this feature no tool of the tool set can reach (product
+    /// corners tighter than the smallest tool), with the reason.
+    pub unreachable: Vec<String>,
 }
+
+/// How a refusal for lack of any tool that fits starts (stage 7 reports it
+/// as unreachable material, rule `operations.unreachable`).
+pub(crate) const NO_TOOL_FITS: &str = "unreachable: no tool of the set-up's tool set fits";
 
 /// Sampling step (mm) for containment checks and polygons.
 const STEP: f64 = 0.25;
@@ -190,7 +197,8 @@ fn geometry(
         return None;
     }
     if let Some(free) = clip {
-        loops = clipped_to_free(&loops, free, &product_strips(&edges), d);
+        let grown = grown_region(&edges, m, d);
+        loops = clipped_to_free(&grown, free, &product_strips(&edges), d);
         if loops.is_empty() {
             return None;
         }
@@ -264,6 +272,83 @@ fn away_from_product(polys: &[Vec<DVec2>], product: &[Edge2], reach: f64) -> Vec
         .collect()
 }
 
+/// The feature region grown beyond its non-product edges (straight edges):
+/// the region, a band `overhang·D` wide beyond each such edge, and a patch
+/// at every vertex between two of them. An open edge's band also runs on
+/// past an end where product meets it, so a tool can reach a slot narrower
+/// than itself from the open side (clipping to the free space and the
+/// product strips keep it off the product). Contours, all counter-clockwise
+/// except the region's holes.
+fn grown_region(edges: &[(Vec<Edge2>, Vec<Adjacency>)], m: &Method, d: f64) -> Vec<Vec<[f64; 2]>> {
+    use i_overlay::core::fill_rule::FillRule;
+    use i_overlay::core::overlay_rule::OverlayRule;
+    use i_overlay::float::single::SingleFloatOverlay;
+    let ccw = |mut c: Vec<DVec2>| {
+        let area: f64 = (0..c.len())
+            .map(|i| c[i].perp_dot(c[(i + 1) % c.len()]))
+            .sum();
+        if area < 0.0 {
+            c.reverse();
+        }
+        c.into_iter().map(|p| [p.x, p.y]).collect::<Vec<[f64; 2]>>()
+    };
+    let overhang = |a: Adjacency| match a {
+        Adjacency::Product => 0.0,
+        Adjacency::Open => m.overhang.open * d,
+        Adjacency::Feature => m.overhang.feature * d,
+    };
+    let region: Vec<Vec<[f64; 2]>> = edges
+        .iter()
+        .map(|(es, _)| es.iter().map(|e| [e.a.x, e.a.y]).collect())
+        .collect();
+    let mut bands: Vec<Vec<[f64; 2]>> = Vec::new();
+    for (es, adj) in edges {
+        let n = es.len();
+        for i in 0..n {
+            let o = overhang(adj[i]);
+            let e = es[i];
+            if o <= 0.0 || e.a.distance_squared(e.b) < 1e-18 {
+                continue;
+            }
+            let t = (e.b - e.a).normalize();
+            let nrm = DVec2::new(t.y, -t.x);
+            let open = adj[i] == Adjacency::Open;
+            let prev = adj[(i + n - 1) % n];
+            let next = adj[(i + 1) % n];
+            let a = if open && prev == Adjacency::Product {
+                e.a - t * o
+            } else {
+                e.a
+            };
+            let b = if open && next == Adjacency::Product {
+                e.b + t * o
+            } else {
+                e.b
+            };
+            bands.push(ccw(vec![a, b, b + nrm * o, a + nrm * o]));
+            // The corner patch towards the next non-product edge.
+            let o2 = overhang(next);
+            let f = es[(i + 1) % n];
+            if o2 > 0.0 && f.a.distance_squared(f.b) > 1e-18 {
+                let t2 = (f.b - f.a).normalize();
+                let n2 = DVec2::new(t2.y, -t2.x);
+                let v = e.b;
+                if (nrm * o).perp_dot(n2 * o2).abs() > 1e-12 {
+                    bands.push(ccw(vec![
+                        v,
+                        v + nrm * o,
+                        v + nrm * o + n2 * o2,
+                        v + n2 * o2,
+                    ]));
+                }
+            }
+        }
+    }
+    let grown: crate::free::Shapes =
+        region.overlay_as::<i64>(&bands, OverlayRule::Union, FillRule::NonZero);
+    grown.into_iter().flatten().collect()
+}
+
 /// Thin strips just beyond every product edge (on its outward side, a
 /// little longer than the edge): cut from the moved region, the offset then
 /// keeps the tool centre r from each product edge even where a moved
@@ -306,7 +391,7 @@ fn clip_slack(r: f64) -> f64 {
 /// the free space, less the strips beyond product edges; as
 /// cavalier loops with the same orientation convention.
 fn clipped_to_free(
-    loops: &[cavalier_contours::polyline::Polyline<f64>],
+    subject: &[Vec<[f64; 2]>],
     free: &crate::free::Shapes,
     strips: &[Vec<[f64; 2]>],
     d: f64,
@@ -315,17 +400,7 @@ fn clipped_to_free(
     use i_overlay::core::fill_rule::FillRule;
     use i_overlay::core::overlay_rule::OverlayRule;
     use i_overlay::float::single::SingleFloatOverlay;
-    let subject: Vec<Vec<[f64; 2]>> = loops
-        .iter()
-        .map(|p| {
-            (0..p.vertex_count())
-                .map(|i| {
-                    let v = p.at(i);
-                    [v.x, v.y]
-                })
-                .collect()
-        })
-        .collect();
+    let subject: Vec<Vec<[f64; 2]>> = subject.to_vec();
     // Outer ccw and holes cw: non-zero winding is the region.
     let region: crate::free::Shapes = subject.overlay_as::<i64>(
         &Vec::<Vec<[f64; 2]>>::new(),
@@ -798,6 +873,7 @@ pub(crate) fn feature_operations(
         .for_feature(bottom_product, sides)
         .ok_or_else(|| format!("no method applies (sides {sides:?})"))?;
     let mut warnings = Vec::new();
+    let mut unreachable = Vec::new();
 
     // Tool: by the method's rule, smaller than the smallest product corner.
     let mut cands: Vec<&Tool> = env.tools.tools.iter().collect();
@@ -828,6 +904,12 @@ pub(crate) fn feature_operations(
                  the smallest that fits is used and material stays in those corners",
                 f.id
             ));
+            unreachable.push(format!(
+                "unreachable: product corners of {} tighter than any tool (smallest corner \
+                 radius {rho:.3} mm, smallest tool radius {:.3} mm): the material in them stays",
+                f.id,
+                cands[0].diameter / 2.0
+            ));
         } else {
             cands = small;
         }
@@ -835,7 +917,18 @@ pub(crate) fn feature_operations(
     let (tool, g) = cands
         .iter()
         .find_map(|t| geometry(f, m, t, free).map(|g| (*t, g)))
-        .ok_or("no tool of the set-up's tool set fits")?;
+        .ok_or_else(|| {
+            let smallest = env
+                .tools
+                .tools
+                .iter()
+                .map(|t| t.diameter)
+                .fold(f64::INFINITY, f64::min);
+            format!(
+                "{NO_TOOL_FITS} (the smallest, D {smallest:.3} mm, has no room at its radius \
+                 from the product and the free space)"
+            )
+        })?;
     let d = tool.diameter;
     let (rpm, feed_rough, feed_finish) = conditions(env, tool);
     let boundary = m.boundary.as_ref().filter(|_| !g.product.is_empty());
@@ -1225,7 +1318,11 @@ pub(crate) fn feature_operations(
     if ops.is_empty() {
         return Err("the tool-centre region is empty at every z-level".into());
     }
-    Ok(Made { ops, warnings })
+    Ok(Made {
+        ops,
+        warnings,
+        unreachable,
+    })
 }
 
 fn spin_sign(s: SpindleDirection) -> f64 {

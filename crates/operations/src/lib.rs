@@ -150,7 +150,8 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
     // Features that get no operation, and every feature they cover from
     // the tool side (accessibility constraints): machining those would
     // plunge or rapid into material that is still there.
-    let mut skipped: std::collections::BTreeMap<usize, String> = plan
+    // (reason, whether the material is unreachable in this set-up)
+    let mut skipped: std::collections::BTreeMap<usize, (String, bool)> = plan
         .machining_features
         .iter()
         .enumerate()
@@ -158,7 +159,12 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         .map(|(i, _)| {
             (
                 i,
-                "the part covers it from the tool side (another set-up)".to_string(),
+                (
+                    "unreachable in this set-up: the part covers it from the tool side \
+                     (another set-up)"
+                        .to_string(),
+                    true,
+                ),
             )
         })
         .collect();
@@ -189,7 +195,18 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
             let (a, b) = (c.first.0 as usize, c.second.0 as usize);
             let a_fails = skipped.contains_key(&a) || matches!(made[a], Some(Err(_)));
             if a_fails && !skipped.contains_key(&b) {
-                skipped.insert(b, format!("{} above it gets no operation", c.first));
+                // Below material no tool reaches, the same holds.
+                let unreachable = match (&skipped.get(&a), &made[a]) {
+                    (Some((_, u)), _) => *u,
+                    (None, Some(Err(e))) => e.starts_with(layers::NO_TOOL_FITS),
+                    _ => false,
+                };
+                let reason = if unreachable {
+                    format!("unreachable: {} above it is", c.first)
+                } else {
+                    format!("{} above it gets no operation", c.first)
+                };
+                skipped.insert(b, (reason, unreachable));
                 made[b] = None;
                 changed = true;
             }
@@ -199,14 +216,19 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         }
     }
     for (i, f) in plan.machining_features.iter().enumerate() {
-        if let Some(reason) = skipped.get(&i) {
+        if let Some((reason, unreachable)) = skipped.get(&i) {
             out.warnings
                 .push(format!("{}: not machined: {reason}", f.id));
+            let rule = if *unreachable {
+                "operations.unreachable"
+            } else {
+                "operations.feature"
+            };
             out.refusals.push(Refusal {
                 stage: Stage::Operations,
-                rule: "operations.feature".into(),
+                rule: rule.into(),
                 reason: format!("no operation for {}: {reason}", f.id),
-                provenance: Provenance::new(ProvenanceSource::Default, "operations.feature"),
+                provenance: Provenance::new(ProvenanceSource::Default, rule),
             });
             continue;
         }
@@ -214,6 +236,17 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         match made {
             Ok(made) => {
                 out.warnings.extend(made.warnings);
+                for reason in made.unreachable {
+                    out.refusals.push(Refusal {
+                        stage: Stage::Operations,
+                        rule: "operations.unreachable".into(),
+                        reason,
+                        provenance: Provenance::new(
+                            ProvenanceSource::Default,
+                            "operations.unreachable",
+                        ),
+                    });
+                }
                 for lo in made.ops {
                     let id = OperationId(out.operations.len() as u32);
                     out.operations.push(to_operation(id, f, lo, &env));
@@ -221,11 +254,17 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
             }
             Err(reason) => {
                 out.warnings.push(format!("{}: {reason}", f.id));
+                // No tool fits at all: unreachable material, not a failure.
+                let rule = if reason.starts_with(layers::NO_TOOL_FITS) {
+                    "operations.unreachable"
+                } else {
+                    "operations.feature"
+                };
                 out.refusals.push(Refusal {
                     stage: Stage::Operations,
-                    rule: "operations.feature".into(),
+                    rule: rule.into(),
                     reason: format!("no operation for {}: {reason}", f.id),
-                    provenance: Provenance::new(ProvenanceSource::Default, "operations.feature"),
+                    provenance: Provenance::new(ProvenanceSource::Default, rule),
                 });
             }
         }
