@@ -2,7 +2,9 @@
 //! split at a height, split by a line in plan, merge two adjacent features
 //! of one owner, and a new feature from a drawn profile. [`AppState`]
 //! wraps each in one undoable history entry; here nothing is drawn and
-//! nothing is undone, so the geometry is testable on its own.
+//! nothing is undone, so the geometry is testable on its own. On `Err` a
+//! function may have changed the plan part-way (a cycle is found after the
+//! change): callers edit a copy, as `AppState::edit` does.
 //!
 //! Profiles keep their arcs: the boolean work is cavalier_contours' (the
 //! library the operations and pocketing crates use), so a split's pieces
@@ -22,6 +24,13 @@ use thinplan_plan::{
 
 /// Lengths below this (mm) are one point: vertices, z levels, gaps.
 const EPS: f64 = 1e-6;
+/// Coordinates a user may give (mm): a kilometre is beyond any part, and
+/// larger numbers would overflow the boolean work's bounds.
+const FAR: f64 = 1e6;
+
+fn reasonable(v: f64) -> bool {
+    v.is_finite() && v.abs() < FAR
+}
 /// Areas below this (mm²) are slivers: a shared edge or a grazing cut.
 /// (A two-vertex loop with an arc is a real piece: a lens.)
 const AREA_EPS: f64 = 1e-9;
@@ -265,7 +274,7 @@ pub fn split_at_height(
 ) -> Result<Vec<MachiningFeatureId>, String> {
     let i = find(plan, id)?;
     let f = plan.machining_features[i].clone();
-    if !(z.is_finite() && z > f.shape.z_min + EPS && z < f.shape.z_max - EPS) {
+    if !(reasonable(z) && z > f.shape.z_min + EPS && z < f.shape.z_max - EPS) {
         return Err(format!(
             "{id}: split height {z} is not inside its z range {:.3}–{:.3}",
             f.shape.z_min, f.shape.z_max
@@ -452,8 +461,10 @@ pub fn split_by_line(
     let i = find(plan, id)?;
     let f = plan.machining_features[i].clone();
     let d = q - p;
-    if !(p.is_finite() && q.is_finite() && d.length() > EPS) {
-        return Err(format!("{id}: the split line needs two distinct points"));
+    if ![p.x, p.y, q.x, q.y].into_iter().all(reasonable) || d.length() <= EPS {
+        return Err(format!(
+            "{id}: the split line needs two distinct points within {FAR} mm"
+        ));
     }
     let d = d.normalize();
     let n = DVec2::new(-d.y, d.x);
@@ -719,15 +730,20 @@ pub fn add_drawn(
     if !plan.stiffness_features.iter().any(|f| f.id == owner) {
         return Err(format!("no {owner}"));
     }
-    if !(z_min.is_finite() && z_max.is_finite() && z_max > z_min + EPS) {
-        return Err(format!("z range {z_min}–{z_max} is empty"));
+    if !(reasonable(z_min) && reasonable(z_max) && z_max > z_min + EPS) {
+        return Err(format!(
+            "z range {z_min}–{z_max} is empty or beyond {FAR} mm"
+        ));
     }
     let mut pts: Vec<DVec2> = points.to_vec();
     pts.dedup_by(|p, q| (*p - *q).length() < EPS);
     while pts.len() > 1 && (pts[0] - pts[pts.len() - 1]).length() < EPS {
         pts.pop();
     }
-    if pts.len() < 3 || pts.iter().any(|p| !p.is_finite()) {
+    if pts.iter().any(|p| !(reasonable(p.x) && reasonable(p.y))) {
+        return Err(format!("profile points must lie within {FAR} mm"));
+    }
+    if pts.len() < 3 {
         return Err("a profile needs at least three distinct points".into());
     }
     let mut p = Pline::with_capacity(pts.len(), true);
@@ -1099,6 +1115,32 @@ mod tests {
         assert!(add_drawn(&mut plan, owner, &pts, 3.0, 1.0).is_err());
         assert!(parse_points("1, x").is_err());
         assert!(parse_points("1, 2, 3").is_err());
+    }
+
+    #[test]
+    fn wild_numbers_are_refused_not_panicked_on() {
+        let sq = vec![
+            v(0.0, 0.0, 0.0),
+            v(4.0, 0.0, 0.0),
+            v(4.0, 4.0, 0.0),
+            v(0.0, 4.0, 0.0),
+        ];
+        let wild = [f64::NAN, f64::INFINITY, -f64::INFINITY, 1e308, -1e300, 1e7];
+        for &w in &wild {
+            let mut plan = plan_with(vec![feature(0, sq.clone(), vec![])]);
+            let before = plan.clone();
+            assert!(split_at_height(&mut plan, M(0), w).is_err());
+            assert!(
+                split_by_line(&mut plan, M(0), DVec2::new(w, 0.0), DVec2::new(2.0, 1.0)).is_err()
+            );
+            assert!(
+                split_by_line(&mut plan, M(0), DVec2::new(2.0, 0.0), DVec2::new(2.0, w)).is_err()
+            );
+            let pts = [DVec2::ZERO, DVec2::new(w, 0.0), DVec2::new(1.0, 1.0)];
+            assert!(add_drawn(&mut plan, StiffnessFeatureId(0), &pts, 0.0, 1.0).is_err());
+            assert!(add_drawn(&mut plan, StiffnessFeatureId(0), &pts[..], 0.0, w).is_err());
+            assert_eq!(plan, before, "a refused edit changes nothing");
+        }
     }
 
     proptest! {
