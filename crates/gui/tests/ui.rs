@@ -219,6 +219,35 @@ fn snapshots_of_the_main_views() {
     results.unwrap();
 }
 
+/// The inspector's machining-feature editing after a split by a line, with
+/// the drawing section open (tall_rib; operations dropped by the edit, so
+/// no tool paths in the picture).
+#[test]
+fn snapshot_of_machining_feature_editing() {
+    let mut h = harness("builtin:tall_rib");
+    run_all(&mut h);
+    let plan = h.state().state.plan().unwrap().clone();
+    let f = plan
+        .machining_features
+        .iter()
+        .max_by(|a, b| {
+            let (va, vb) = (
+                thinplan_gui::edit::prism_volume(&a.shape),
+                thinplan_gui::edit::prism_volume(&b.shape),
+            );
+            va.total_cmp(&vb).then(b.id.cmp(&a.id))
+        })
+        .unwrap()
+        .clone();
+    h.state_mut().state.select(Some(Entity::Machining(f.id)));
+    h.run_steps(2);
+    h.get_by_label("Split by line").click();
+    h.run();
+    h.get_by_label_contains("Draw a machining feature").click();
+    h.run();
+    h.snapshot_options("gui_edit", &snapshot_options());
+}
+
 #[test]
 fn knowledge_errors_are_listed_with_their_place_and_nothing_is_lost() {
     let mut h = harness("builtin:tall_rib");
