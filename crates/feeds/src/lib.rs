@@ -42,13 +42,16 @@
 //!    zero tangential acceleration is possible wherever accelerating (braking) unloads the
 //!    saturated axis, e.g. at arc exits and entries — the maximum-velocity curve is implied by
 //!    the constraints.
-//! 6. **Time.** Per segment, the least of the ramp time `2Δs/(v_i + v_{i+1})` and, where it is
-//!    feasible, the accelerate–cruise–decelerate profile
-//!    `u(σ) = min(u_i + 2a⁺σ, vc_i², u_{i+1} + 2a⁻(Δs − σ))`, with `vc_i²` the segment's cap
-//!    lowered to the cruise-feasible normal cap `min_k A_k/|c_jk|` (and `A_c/κ_j`) of both
-//!    ends, and `a⁺` (`a⁻`) the largest acceleration (deceleration) keeping every axis within
-//!    its limit with both end curvatures over the whole phase. Its time is summed in closed
-//!    form (`Δt = 2d/(v_a + v_b)` per constant-acceleration piece, `d/v` for the cruise).
+//! 6. **Time.** Per segment, the least of the ramp time `2Δs/(v_i + v_{i+1})` and the fastest
+//!    profile inside the segment between the two end speeds: on a straight segment
+//!    accelerate–cruise–decelerate at `±min_k A_k/|d_k|`; on a curved one the exact optimum
+//!    `u(σ) = min(F(σ), B(σ), vc_i²)` under the conservative in-segment model (curvature of
+//!    either end at every speed; `vc_i²` the segment's cap lowered to the cruise-feasible
+//!    normal cap `min_k A_k/|c_jk|` and `A_c/κ_j` of both ends), where `F` accelerates from
+//!    `u_i` at the largest acceleration `a⁺(u)` (a concave piecewise-linear function of `u`)
+//!    and `B` decelerates into `u_{i+1}`: closed form per linear piece, the meeting level by
+//!    safeguarded Newton. (Until 2026-11-23 a constant acceleration up to the cap was used:
+//!    a heuristic whose rate fell as the cap rose, so a faster machine could be slower.)
 //!    Long straight segments are thus timed exactly, however coarse the point spacing.
 //!
 //! **Tangential acceleration (the choice the design leaves open).** The available tangential
@@ -424,59 +427,6 @@ fn normal_cap2(c: DVec3, limits: &MachineLimits) -> f64 {
     cap
 }
 
-/// Largest tangential acceleration (`dir = 1`, forward from `u0`) or deceleration (`dir = -1`,
-/// backward from `u0` at the segment's far end) on segment `w` such that every axis keeps
-/// `|d_k·a + c_k·u| ≤ A_k` with the curvature vectors of both end points, for every `u` from
-/// `u0` up to `min(vc², u0 + 2aΔs)`.
-#[inline]
-fn accel_bound(u0: f64, w: &Work, c_far: &DVec3, dir: f64, limits: &MachineLimits) -> f64 {
-    // The tangential acceleration alone also stays within every axis limit, even where the
-    // normal acceleration points against it and the coupled bound would allow more: the
-    // three-point curvature is an estimate, and this keeps "tangential ≤ min_k A_k/|d_k|"
-    // true by itself.
-    let a_tan = w.a_tan;
-    if w.c == DVec3::ZERO && *c_far == DVec3::ZERO {
-        return a_tan; // straight: no normal acceleration
-    }
-    let ds = w.len;
-    let vc2 = w.vc2.max(u0);
-    let mut a_free = a_tan;
-    let mut a_cap = a_tan;
-    for k in 0..3 {
-        let dk = w.d[k];
-        let adk = dk.abs();
-        if adk < 1e-12 {
-            continue; // no tangential share on this axis: a speed cap, in vc²
-        }
-        let inv = 1.0 / adk;
-        let ak = limits.a_max[k];
-        for ck in [w.c[k], c_far[k]] {
-            if ck == 0.0 {
-                continue; // no coupling: only a_tan
-            }
-            // Constraint: |dk|·a + σ·u ≤ A_k.
-            let sigma = dir * dk.signum() * ck;
-            let at_u0 = (ak - sigma * u0) * inv;
-            let at_cap = (ak - sigma * vc2) * inv;
-            a_cap = a_cap.min(at_u0).min(at_cap);
-            let free = if sigma > 0.0 {
-                // Binding at the end of the phase: |dk|·a + σ(u0 + 2aΔs) ≤ A_k.
-                (ak - sigma * u0) / (adk + 2.0 * sigma * ds)
-            } else {
-                at_u0
-            };
-            a_free = a_free.min(free);
-        }
-    }
-    let a_free = a_free.max(0.0);
-    if u0 + 2.0 * a_free * ds <= vc2 {
-        a_free
-    } else {
-        // The phase reaches the cruise cap: the constraint is needed only up to vc².
-        ((vc2 - u0) / (2.0 * ds)).max(a_cap).max(0.0)
-    }
-}
-
 /// Linear constraints `α·u_i + β·u_{i+1} ≤ γ` on segment `w` (from point i to i+1) for a
 /// constant tangential acceleration `a = (u_{i+1} − u_i)/2Δs` (`u` linear in `s`):
 /// `|a| ≤ min_k A_k/|d_k|`, and on every axis `|d_k·a + c_k(σ)·u(σ)| ≤ A_k` along the
@@ -565,25 +515,194 @@ fn max_end(cons: &[(f64, f64, f64)], x: f64, y_hi: f64) -> f64 {
 }
 
 /// Time over segment `w` between end speeds² `u0` and `u1`: the constant-acceleration ramp
-/// (`u` linear in `s`, which the segment constraints make feasible), or the
-/// accelerate–cruise–decelerate profile when it is feasible and faster.
+/// (`u` linear in `s`, which the segment constraints make feasible), or the fastest profile
+/// inside the segment when it is faster (straight: accelerate–cruise–decelerate; curved: see
+/// [`curved_segment_time`]).
 #[inline]
 fn segment_time_any(u0: f64, u1: f64, w: &Work, c_far: &DVec3, limits: &MachineLimits) -> f64 {
     let (v0, v1) = (u0.sqrt(), u1.sqrt());
-    let mut t = if v0 + v1 > 0.0 {
+    let ramp = if v0 + v1 > 0.0 {
         2.0 * w.len / (v0 + v1)
     } else {
         f64::INFINITY
     };
-    if u0 <= w.vc2 && u1 <= w.vc2 {
-        let a = accel_bound(u0, w, c_far, 1.0, limits);
-        let b = accel_bound(u1, w, c_far, -1.0, limits);
+    if u0 > w.vc2 || u1 > w.vc2 {
+        return ramp;
+    }
+    // No profile is faster than the segment at the highest speed it can reach: skip the
+    // search where the ramp already achieves that bound.
+    let peak = w
+        .vc2
+        .min(u0.min(u1) + 2.0 * w.a_tan * w.len)
+        .max(u0.max(u1));
+    if ramp <= w.len / peak.sqrt() {
+        return ramp;
+    }
+    if w.c == DVec3::ZERO && *c_far == DVec3::ZERO {
+        // Straight: ±a_tan whatever the speed, accelerate–cruise–decelerate in closed form.
+        let a = w.a_tan;
         let slack = 1.0 + 1e-12;
-        if u1 <= (u0 + 2.0 * a * w.len) * slack && u0 <= (u1 + 2.0 * b * w.len) * slack {
-            t = t.min(segment_time(u0, u1, w.vc2, a, b, w.len));
+        if u1 <= (u0 + 2.0 * a * w.len) * slack && u0 <= (u1 + 2.0 * a * w.len) * slack {
+            return ramp.min(segment_time(u0, u1, w.vc2, a, a, w.len));
+        }
+        return ramp;
+    }
+    ramp.min(curved_segment_time(u0, u1, w, c_far, limits))
+}
+
+/// The lines `(α, β)` whose lower envelope `a⁺(u) = min(α − β·u)` is the largest tangential
+/// acceleration (`dir = 1`; deceleration towards the end for `dir = -1`) at speed² `u` on a
+/// curved segment: `a_tan`, and on every axis `|d_k|·a + σ·u ≤ A_k` with the curvature of
+/// either end point (lines with σ ≤ 0 never go below `a_tan` and are left out).
+#[inline]
+fn accel_lines(
+    w: &Work,
+    c_far: &DVec3,
+    dir: f64,
+    limits: &MachineLimits,
+) -> ([(f64, f64); 7], usize) {
+    let mut out = [(w.a_tan, 0.0); 7];
+    let mut n = 1;
+    for k in 0..3 {
+        let dk = w.d[k];
+        let adk = dk.abs();
+        if adk < 1e-12 {
+            continue; // no tangential share on this axis: a speed cap, in vc²
+        }
+        for ck in [w.c[k], c_far[k]] {
+            let sigma = dir * dk.signum() * ck;
+            if sigma > 0.0 {
+                out[n] = (limits.a_max[k] / adk, sigma / adk);
+                n += 1;
+            }
         }
     }
-    t
+    (out, n)
+}
+
+/// Distance and time to go from speed² `us` up to `ut` accelerating at `a⁺(u)` (the lower
+/// envelope of `lines`), in closed form per line: `ds = du/2a`, `dt = dw/a` with `w = √u`.
+#[inline]
+fn climb(lines: &[(f64, f64)], us: f64, ut: f64) -> (f64, f64) {
+    if ut <= us {
+        return (0.0, 0.0);
+    }
+    let val = |l: (f64, f64), u: f64| l.0 - l.1 * u;
+    let mut cur = lines[0];
+    for &l in &lines[1..] {
+        let (a, b) = (val(l, us), val(cur, us));
+        if a < b || (a == b && l.1 > cur.1) {
+            cur = l;
+        }
+    }
+    let (mut u, mut dist, mut time) = (us, 0.0, 0.0);
+    loop {
+        // the envelope is concave: the next line to take over is steeper
+        let mut end = ut;
+        let mut next = None;
+        for &l in lines {
+            if l.1 > cur.1 {
+                let x = (l.0 - cur.0) / (l.1 - cur.1);
+                if x > u && x < end {
+                    end = x;
+                    next = Some(l);
+                }
+            }
+        }
+        let (d, t) = climb_line(cur, u, end);
+        dist += d;
+        time += t;
+        match next {
+            Some(l) => {
+                cur = l;
+                u = end;
+            }
+            None => return (dist, time),
+        }
+    }
+}
+
+/// [`climb`] along one line `a = α − β·u` (β ≥ 0) from `ua` to `ub`.
+#[inline]
+fn climb_line((alpha, beta): (f64, f64), ua: f64, ub: f64) -> (f64, f64) {
+    let gb = alpha - beta * ub;
+    if gb <= 0.0 {
+        return (f64::INFINITY, f64::INFINITY); // the acceleration runs out before ub
+    }
+    let (wa, wb) = (ua.sqrt(), ub.sqrt());
+    if beta == 0.0 {
+        return ((ub - ua) / (2.0 * alpha), (wb - wa) / alpha);
+    }
+    let half_log = 0.5 * (beta * (ub - ua) / gb).ln_1p(); // ½·ln(g(ua)/g(ub))
+    let dist = half_log / beta;
+    // ∫ dw/(α − βw²) = (artanh(r·wb) − artanh(r·wa))/√(αβ) with r = √(β/α), written as
+    // ln((1 + r·wb)/(1 + r·wa)) + ½·ln(g(ua)/g(ub)): no cancellation, no rounding past 1
+    let r = (beta / alpha).sqrt();
+    let time = ((r * (wb - wa) / (1.0 + r * wa)).ln_1p() + half_log) / (alpha * beta).sqrt();
+    (dist, time)
+}
+
+/// Fastest time over a curved segment between end speeds² `u0` and `u1` under the
+/// conservative in-segment model (both end curvatures at every speed, speed² ≤ vc²):
+/// `u(σ) = min(F(σ), B(σ), vc²)` with `F` accelerating from `u0` at `a⁺(u)` and `B`
+/// decelerating into `u1`, both solved in closed form, their meeting level by safeguarded
+/// Newton (the distance to reach a level is convex in it). Infinite when that model cannot
+/// connect the end speeds (the ramp then times the segment). The exact optimum of a problem
+/// whose constraints only loosen with the limits, so a faster machine is never slower here.
+fn curved_segment_time(u0: f64, u1: f64, w: &Work, c_far: &DVec3, limits: &MachineLimits) -> f64 {
+    let (lf, nf) = accel_lines(w, c_far, 1.0, limits);
+    let (lb, nb) = accel_lines(w, c_far, -1.0, limits);
+    let (lf, lb) = (&lf[..nf], &lb[..nb]);
+    let ds = w.len;
+    let cap = w.vc2;
+    let reach = |u: f64| {
+        let (df, tf) = climb(lf, u0, u);
+        let (db, tb) = climb(lb, u1, u);
+        (df + db, tf + tb)
+    };
+    let lo = u0.max(u1);
+    let (d_lo, t_lo) = reach(lo);
+    if d_lo > ds * (1.0 + 1e-12) {
+        return f64::INFINITY;
+    }
+    if d_lo >= ds {
+        return t_lo;
+    }
+    if cap.is_finite() {
+        let (d_cap, t_cap) = reach(cap);
+        if d_cap <= ds {
+            return t_cap + (ds - d_cap) / cap.sqrt(); // reaches the cap and cruises
+        }
+    }
+    let a_at = |lines: &[(f64, f64)], u: f64| {
+        lines
+            .iter()
+            .map(|l| l.0 - l.1 * u)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (mut a, mut b) = (lo, cap); // reach(a) < ds < reach(b)
+    let mut u = lo;
+    let mut d = d_lo;
+    let mut t = t_lo;
+    for _ in 0..100 {
+        let slope = 0.5 / a_at(lf, u) + 0.5 / a_at(lb, u);
+        let mut un = u + (ds - d) / slope;
+        if !(un > a && un < b) {
+            un = 0.5 * (a + b);
+        }
+        if (un - u).abs() <= 1e-14 * u {
+            break;
+        }
+        u = un;
+        (d, t) = reach(u);
+        if d <= ds {
+            a = u;
+        } else {
+            b = u;
+        }
+    }
+    // a cruise at u covers what is left (d ≤ ds) or the profile overshoots by rounding
+    t + (ds - d).max(0.0) / u.sqrt()
 }
 
 /// Time over a segment of length `ds` with end speeds² `u0`, `u1`, cruise cap² `vc2`,
