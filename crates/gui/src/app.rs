@@ -310,6 +310,13 @@ impl ThinplanApp {
         self.file_dialog.pick_file();
     }
 
+    /// Opens the file picker for a part or a plan in folder `dir`.
+    pub fn pick_in(&mut self, what: Picking, dir: PathBuf) {
+        self.file_dialog = file_dialog(what).initial_directory(dir);
+        self.picking = Some(what);
+        self.file_dialog.pick_file();
+    }
+
     /// Shows the file picker while it is open and opens what was picked.
     fn file_picker(&mut self, ctx: &egui::Context) {
         self.file_dialog.update(ctx);

@@ -466,6 +466,7 @@ fn export_writes_gcode_that_parses_and_a_sheet_naming_every_operation() {
     let program = thinplan_stocksim::parse(&text, "tall_rib.ngc").expect("the G-code parses");
     assert!(!program.moves.is_empty() && program.ended);
     let html = std::fs::read_to_string(&sheet).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
     let plan = h.state().state.plan().unwrap().clone();
     assert!(!plan.operations.is_empty());
     for o in &plan.operations {
@@ -510,4 +511,26 @@ fn a_part_opens_through_the_file_picker() {
         "{src}: {}",
         h.state().state.message
     );
+    // A STEP file the same way.
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../step/tests/fixtures")
+        .canonicalize()
+        .unwrap();
+    h.state_mut()
+        .pick_in(thinplan_gui::app::Picking::Part, fixtures);
+    h.run();
+    h.get_by_label_contains("box_mm.step").scroll_to_me();
+    h.run();
+    h.get_by_label_contains("box_mm.step").click();
+    h.run();
+    h.get_by_label("🗀  Open").click();
+    h.run();
+    let plan = h.state().state.plan().unwrap();
+    assert!(
+        plan.part.source.ends_with("box_mm.step"),
+        "{}: {}",
+        plan.part.source,
+        h.state().state.message
+    );
+    assert_eq!(plan.part.format, thinplan_plan::PartFormat::Step);
 }
