@@ -61,9 +61,9 @@ pub struct ThinplanApp {
     /// Simulation on/off and position (kept when the plan changes if it fits).
     pub simulate: bool,
     pub sim_index: usize,
-    /// The in-window file picker (egui-file-dialog) and what it was opened for.
-    pub file_dialog: egui_file_dialog::FileDialog,
-    pub picking: Option<Picking>,
+    /// The in-window file picker (egui_file) while it is open, and what it
+    /// was opened for.
+    pub file_dialog: Option<(Picking, egui_file::FileDialog)>,
 }
 
 /// What the file picker was opened for.
@@ -73,13 +73,12 @@ pub enum Picking {
     Plan,
 }
 
-/// The file picker, filtered to parts (STEP or native `.part.ron`) or
-/// plans; it starts in the bundled parts folder when there is one.
-fn file_dialog(picking: Picking) -> egui_file_dialog::FileDialog {
-    use egui_file_dialog::Filter;
+/// The file picker in `dir`, listing folders and parts (STEP or native
+/// `.part.ron`) or plans.
+fn file_dialog(picking: Picking, dir: PathBuf) -> egui_file::FileDialog {
     // By the whole name: `.part.ron` parts, not the `.labels.ron` beside them.
-    let ends = |suffixes: &'static [&'static str]| {
-        Filter::new(move |p: &std::path::Path| {
+    let ends = |suffixes: &'static [&'static str]| -> egui_file::Filter<PathBuf> {
+        Box::new(move |p: &std::path::Path| {
             let name = p
                 .file_name()
                 .map(|n| n.to_string_lossy().to_lowercase())
@@ -87,21 +86,28 @@ fn file_dialog(picking: Picking) -> egui_file_dialog::FileDialog {
             suffixes.iter().any(|s| name.ends_with(s))
         })
     };
-    let d = egui_file_dialog::FileDialog::new();
-    let d = match picking {
-        Picking::Part => d
-            .title("Open a part")
-            .add_file_filter("STEP or native part", ends(&[".step", ".stp", ".part.ron"]))
-            .default_file_filter("STEP or native part"),
-        Picking::Plan => d
-            .title("Open a plan")
-            .add_file_filter("plans", ends(&[".plan.json", ".plan.ron"]))
-            .default_file_filter("plans"),
+    let (title, filter) = match picking {
+        Picking::Part => ("Open a part", ends(&[".step", ".stp", ".part.ron"])),
+        Picking::Plan => ("Open a plan", ends(&[".plan.json", ".plan.ron"])),
     };
+    let mut d = egui_file::FileDialog::open_file()
+        .title(title)
+        .initial_path(dir)
+        .show_files_filter(filter)
+        .show_rename(false)
+        .show_new_folder(false)
+        .default_size([520.0, 420.0]);
+    d.open();
+    d
+}
+
+/// Where the picker starts: the bundled parts folder for parts when there
+/// is one, else the current directory.
+fn start_folder(picking: Picking) -> PathBuf {
     let parts = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/parts");
     match (picking, parts.canonicalize()) {
-        (Picking::Part, Ok(dir)) if dir.is_dir() => d.initial_directory(dir),
-        _ => d,
+        (Picking::Part, Ok(dir)) if dir.is_dir() => dir,
+        _ => std::env::current_dir().unwrap_or_default(),
     }
 }
 
@@ -140,8 +146,7 @@ impl ThinplanApp {
             tree_scrolled_to: None,
             simulate: false,
             sim_index: 0,
-            file_dialog: file_dialog(Picking::Part),
-            picking: None,
+            file_dialog: None,
         };
         app.fill_forms_from_plan();
         app
@@ -303,39 +308,41 @@ impl ThinplanApp {
 
     /// Opens the file picker for a part or a plan.
     pub fn pick(&mut self, what: Picking) {
-        if self.picking != Some(what) {
-            self.file_dialog = file_dialog(what);
-        }
-        self.picking = Some(what);
-        self.file_dialog.pick_file();
+        self.pick_in(what, start_folder(what));
     }
 
     /// Opens the file picker for a part or a plan in folder `dir`.
     pub fn pick_in(&mut self, what: Picking, dir: PathBuf) {
-        self.file_dialog = file_dialog(what).initial_directory(dir);
-        self.picking = Some(what);
-        self.file_dialog.pick_file();
+        self.file_dialog = Some((what, file_dialog(what, dir)));
     }
 
     /// Shows the file picker while it is open and opens what was picked.
     fn file_picker(&mut self, ctx: &egui::Context) {
-        self.file_dialog.update(ctx);
-        let Some(path) = self.file_dialog.take_picked() else {
+        let Some((what, d)) = &mut self.file_dialog else {
             return;
         };
-        match self.picking {
-            Some(Picking::Part) => {
+        let what = *what;
+        let picked = if d.show(ctx).selected() {
+            d.path().map(|p| p.to_path_buf())
+        } else {
+            None
+        };
+        if !d.visible() {
+            self.file_dialog = None;
+        }
+        let Some(path) = picked else { return };
+        match what {
+            Picking::Part => {
                 let src = path.display().to_string();
                 self.forms.part_source = src.clone();
                 self.open_part(&src);
             }
-            Some(Picking::Plan) => {
+            Picking::Plan => {
                 self.forms.plan_path = path.display().to_string();
                 if self.state.open_plan(&path) {
                     self.fill_forms_from_plan();
                 }
             }
-            None => {}
         }
     }
 
