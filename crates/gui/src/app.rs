@@ -1169,6 +1169,10 @@ mod drawing {
                     egui::vec2(ui.available_width().min(300.0), 180.0),
                     Sense::click(),
                 );
+                // Named for screen readers and the headless tests.
+                resp.widget_info(|| {
+                    egui::WidgetInfo::labeled(egui::WidgetType::Other, true, "plan view to draw in")
+                });
                 let scale = ((rect.width() as f64) / (hi.x - lo.x))
                     .min((rect.height() as f64) / (hi.y - lo.y));
                 let to_screen = |p: DVec2| {

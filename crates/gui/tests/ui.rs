@@ -219,6 +219,54 @@ fn snapshots_of_the_main_views() {
     results.unwrap();
 }
 
+#[test]
+fn a_profile_drawn_by_clicks_in_the_plan_view_becomes_a_feature() {
+    let mut h = harness("builtin:tall_rib");
+    run_all(&mut h);
+    let plan = h.state().state.plan().unwrap().clone();
+    let n0 = plan.machining_features.len();
+    let wall = plan.stiffness_features[0].id;
+    h.state_mut().state.select(Some(Entity::Stiffness(wall)));
+    h.run();
+    h.get_by_label(&format!("Draw a machining feature of {wall}"))
+        .click();
+    h.run();
+    h.get_by_label("plan view to draw in").scroll_to_me();
+    h.run();
+    let r = h.get_by_label("plan view to draw in").rect();
+    // Three clicks: a triangle inside the plan view.
+    for (fx, fy) in [(0.3, 0.7), (0.7, 0.7), (0.5, 0.3)] {
+        let p = r.min + eframe::egui::vec2(r.width() * fx, r.height() * fy);
+        h.hover_at(p);
+        h.drag_at(p);
+        h.drop_at(p);
+        h.run();
+    }
+    h.get_by_label("Add drawn feature").scroll_to_me();
+    h.run();
+    h.get_by_label("Add drawn feature").click();
+    h.run();
+    let after = h.state().state.plan().unwrap().clone();
+    assert_eq!(
+        after.machining_features.len(),
+        n0 + 1,
+        "{}",
+        h.state().state.message
+    );
+    let f = after.machining_features.last().unwrap();
+    assert_eq!(f.owner, wall);
+    assert_eq!(f.shape.region.outer.vertices.len(), 3);
+    // Stored counter-clockwise (outer loops are), with an area.
+    assert!(thinplan_gui::edit::loop_area(&f.shape.region.outer) > 1.0);
+    let v = &f.shape.region.outer.vertices;
+    let signed: f64 = (0..3)
+        .map(|i| v[i].x * v[(i + 1) % 3].y - v[(i + 1) % 3].x * v[i].y)
+        .sum();
+    assert!(signed > 0.0);
+    assert!(h.state_mut().state.undo());
+    assert_eq!(h.state().state.plan().unwrap(), &plan);
+}
+
 /// The inspector's machining-feature editing after a split by a line, with
 /// the drawing section open (tall_rib; operations dropped by the edit, so
 /// no tool paths in the picture).
