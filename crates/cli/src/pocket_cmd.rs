@@ -8,8 +8,8 @@ use thinplan_pocketing::timing::{time_path, MachineLimits};
 use thinplan_pocketing::{curvilinear_path, pocket_svg, PocketProfile};
 
 /// Prints the pocket benchmark table (or JSON rows with `json`): the `BenchConfig::cli()` set
-/// (every bench pocket at L/D 1, 4, 10, 40, 100), with FreeCAD Adaptive and TOPP-RA when
-/// their peers are installed.
+/// (every bench pocket at L/D 0.5 to 100; FreeCAD Adaptive up to 10), with FreeCAD Adaptive
+/// and TOPP-RA when their peers are installed.
 pub fn bench_pockets(json: bool) -> Result<(), String> {
     let cfg = BenchConfig::cli();
     if cfg.adaptive.is_none() {

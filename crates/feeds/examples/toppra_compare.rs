@@ -91,12 +91,15 @@ fn main() {
     let python = venv.join("bin/python");
     let script =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tools/peers/toppra/toppra_time.py");
-    let mut theirs: Vec<Option<(f64, u64)>> = vec![None; cases.len()];
+    // TOPP-RA time, gridpoints, and our time on TOPP-RA's own curve (its spline sampled at
+    // 32 points per segment): the same-curve comparison.
+    let mut theirs: Vec<Option<(f64, u64, f64)>> = vec![None; cases.len()];
     let mut scheme = String::new();
     if python.exists() {
         let out = Command::new(&python)
             .arg(&script)
             .arg(&json_file)
+            .args(["--resample", "32"])
             .args(&script_args)
             .output()
             .expect("run toppra_time.py");
@@ -104,9 +107,18 @@ fn main() {
             let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("TOPP-RA JSON");
             scheme = format!("toppra {} ({})", v["toppra_version"], v["scheme"]);
             for (i, r) in v["results"].as_array().unwrap().iter().enumerate() {
-                theirs[i] = r["time"]
-                    .as_f64()
-                    .map(|t| (t, r["gridpoints"].as_u64().unwrap_or(0)));
+                let same: Option<Vec<DVec3>> = r["resampled"].as_array().and_then(|a| {
+                    a.iter()
+                        .map(|q| {
+                            let c = |k: usize| q.get(k).and_then(|x| x.as_f64());
+                            Some(DVec3::new(c(0)?, c(1)?, c(2).unwrap_or(0.0)))
+                        })
+                        .collect()
+                });
+                theirs[i] = r["time"].as_f64().zip(same).map(|(t, pts)| {
+                    let ours_same = schedule_polyline_uniform(&pts, 1e6, &limits).total_time;
+                    (t, r["gridpoints"].as_u64().unwrap_or(0), ours_same)
+                });
             }
         } else {
             eprintln!(
@@ -124,16 +136,20 @@ fn main() {
     if !scheme.is_empty() {
         println!("TOPP-RA: {scheme}");
     }
-    println!("| path | points | length (mm) | ours (s) | TOPP-RA (s) | grid | ratio |");
-    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: |");
+    println!(
+        "| path | points | length (mm) | ours, own points (s) | ours, TOPP-RA's curve (s) | \
+         TOPP-RA (s) | grid | ratio, same curve | ratio, own points |"
+    );
+    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
     for (i, (name, _)) in cases.iter().enumerate() {
         let (t, n, len) = ours[i];
         match theirs[i] {
-            Some((tt, grid)) => println!(
-                "| {name} | {n} | {len:.1} | {t:.6} | {tt:.6} | {grid} | {:.4} |",
+            Some((tt, grid, same)) => println!(
+                "| {name} | {n} | {len:.1} | {t:.6} | {same:.6} | {tt:.6} | {grid} | {:.4} | {:.4} |",
+                same / tt,
                 t / tt
             ),
-            None => println!("| {name} | {n} | {len:.1} | {t:.6} | – | – | – |"),
+            None => println!("| {name} | {n} | {len:.1} | {t:.6} | – | – | – | – | – |"),
         }
     }
 }

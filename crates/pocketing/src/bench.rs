@@ -173,6 +173,10 @@ impl AdaptivePeer {
     }
 }
 
+/// TOPP-RA's time of one path (s) and its curve (the spline through the path's points) sampled
+/// for our schedule.
+pub type ToppraTime = (f64, Vec<DVec2>);
+
 /// TOPP-RA peer (`tools/peers/toppra/`): the venv's python and `toppra_time.py`.
 #[derive(Debug, Clone)]
 pub struct ToppraPeer {
@@ -208,13 +212,14 @@ impl ToppraPeer {
         }
     }
 
-    /// TOPP-RA times (s) of several planar paths in one run of the script; `None` where TOPP-RA
-    /// failed on a path.
+    /// TOPP-RA times (s) of several planar paths in one run of the script, each with the
+    /// script's cubic spline through the points sampled at [`Self::RESAMPLE`] points per
+    /// segment (so that our schedule can time the same curve); `None` where TOPP-RA failed.
     pub fn times(
         &self,
         paths: &[(String, Vec<DVec2>)],
         limits: &MachineLimits,
-    ) -> Result<Vec<Option<f64>>, String> {
+    ) -> Result<Vec<Option<ToppraTime>>, String> {
         let input = serde_json::json!({
             "paths": paths.iter().map(|(name, pts)| serde_json::json!({
                 "name": name,
@@ -230,7 +235,9 @@ impl ToppraPeer {
         let out = std::process::Command::new(&self.python)
             .arg(&self.script)
             .arg(&inp)
-            .args(["--grid-factor", "4", "--min-grid", "2000"])
+            .args(["--grid-factor", &Self::GRID_FACTOR.to_string()])
+            .args(["--min-grid", "2000"])
+            .args(["--resample", &Self::RESAMPLE.to_string()])
             .output()
             .map_err(|e| e.to_string())?;
         let _ = std::fs::remove_dir_all(&dir);
@@ -242,31 +249,114 @@ impl ToppraPeer {
         let res = v["results"]
             .as_array()
             .ok_or("no results from toppra_time.py")?;
-        Ok(res.iter().map(|r| r["time"].as_f64()).collect())
+        Ok(res
+            .iter()
+            .map(|r| {
+                let t = r["time"].as_f64().filter(|t| *t > 0.0)?;
+                let pts = r["resampled"]
+                    .as_array()?
+                    .iter()
+                    .map(|p| Some(DVec2::new(p[0].as_f64()?, p[1].as_f64()?)))
+                    .collect::<Option<Vec<_>>>()?;
+                Some((t, pts))
+            })
+            .collect())
     }
+
+    /// Spline samples per input segment for our side of the same-curve comparison.
+    pub const RESAMPLE: usize = 32;
+    /// TOPP-RA gridpoints per input point (half a gridpoint per resampled point: collocation
+    /// on a coarser grid is optimistic, so the ratio errs against us).
+    pub const GRID_FACTOR: usize = 16;
 }
 
-/// The part of a pocket path TOPP-RA can time like we do: the roughing spiral up to the link to
-/// the finishing pass (that link is a corner stop, which TOPP-RA cannot model), cut before any
-/// junction turning more than the corner angle.
-pub fn toppra_comparable(path: &crate::PocketPath, corner_deg: f64) -> Vec<DVec2> {
-    let pts = &path.points[..path.finish_start.clamp(2, path.points.len())];
+/// A path cut at its corner stops (junctions turning more than `corner_deg`, where our
+/// schedule stops and TOPP-RA, which has no corners, would not): the pieces between them,
+/// repeated points dropped. Each piece is timed rest to rest by both sides and the times
+/// summed, which for our schedule equals the time of the whole path.
+pub fn toppra_pieces(points: &[DVec2], corner_deg: f64) -> Vec<Vec<DVec2>> {
     let cos_lim = corner_deg.to_radians().cos();
-    let mut out: Vec<DVec2> = vec![pts[0]];
-    for &p in &pts[1..] {
-        if p.distance_squared(*out.last().unwrap()) < 1e-18 {
+    let mut pieces: Vec<Vec<DVec2>> = Vec::new();
+    let mut cur: Vec<DVec2> = Vec::new();
+    for &p in points {
+        if cur.last().is_some_and(|q| q.distance_squared(p) < 1e-18) {
             continue;
         }
-        if out.len() >= 2 {
-            let a = (out[out.len() - 1] - out[out.len() - 2]).normalize();
-            let b = (p - out[out.len() - 1]).normalize();
+        if cur.len() >= 2 {
+            let a = (cur[cur.len() - 1] - cur[cur.len() - 2]).normalize();
+            let b = (p - cur[cur.len() - 1]).normalize();
             if a.dot(b) < cos_lim {
-                break;
+                let q = cur[cur.len() - 1];
+                pieces.push(std::mem::replace(&mut cur, vec![q]));
             }
         }
-        out.push(p);
+        cur.push(p);
     }
-    out
+    if cur.len() >= 2 {
+        pieces.push(cur);
+    }
+    pieces
+}
+
+/// Our time over TOPP-RA's under the same limits, piece by piece between corner stops.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct ToppraRatios {
+    /// Same curve on both sides: TOPP-RA's cubic spline through our points, which our
+    /// schedule times sampled at [`ToppraPeer::RESAMPLE`] points per segment.
+    pub same_curve: f64,
+    /// Our schedule on our own points (the time the bench reports) over TOPP-RA on the spline
+    /// through them: differs by the schedule's discretisation and by the geometry (polyline
+    /// with three-point curvature vs spline).
+    pub native: f64,
+}
+
+/// TOPP-RA ratios of several paths (one script run); `None` for a path where TOPP-RA failed
+/// on a piece. Pieces of two points are straight lines, timed exactly by both: ours counts
+/// for both.
+pub fn toppra_ratios(
+    peer: &ToppraPeer,
+    paths: &[Vec<DVec2>],
+    limits: &MachineLimits,
+) -> Result<Vec<Option<ToppraRatios>>, String> {
+    let mut jobs: Vec<(String, Vec<DVec2>)> = Vec::new();
+    let mut owner: Vec<usize> = Vec::new();
+    // per path: ours on the same curve, ours native, TOPP-RA, every piece solved
+    let mut sums = vec![(0.0, 0.0, 0.0, true); paths.len()];
+    for (k, path) in paths.iter().enumerate() {
+        for piece in toppra_pieces(path, limits.corner_angle_deg) {
+            let ours = time_path(&piece, 1e6, limits).total_time;
+            let s = &mut sums[k];
+            s.1 += ours;
+            if piece.len() < 3 {
+                s.0 += ours;
+                s.2 += ours;
+            } else {
+                jobs.push((format!("path {k} piece {}", jobs.len()), piece));
+                owner.push(k);
+            }
+        }
+    }
+    if !jobs.is_empty() {
+        for (k, res) in owner.iter().zip(peer.times(&jobs, limits)?) {
+            let s = &mut sums[*k];
+            match res {
+                Some((t, pts)) => {
+                    s.0 += time_path(&pts, 1e6, limits).total_time;
+                    s.2 += t;
+                }
+                None => s.3 = false,
+            }
+        }
+    }
+    Ok(sums
+        .into_iter()
+        .map(|(same, native, theirs, ok)| {
+            (ok && theirs > 0.0).then(|| ToppraRatios {
+                same_curve: same / theirs,
+                native: native / theirs,
+            })
+        })
+        .collect())
 }
 
 /// Benchmark configuration.
@@ -282,6 +372,9 @@ pub struct BenchConfig {
     pub pockets: Vec<String>,
     /// FreeCAD Adaptive peer, if available.
     pub adaptive: Option<AdaptivePeer>,
+    /// Run FreeCAD Adaptive only up to this L/D (it takes minutes per pocket at 40 and 100);
+    /// `adaptive` is null above it.
+    pub adaptive_max_l_over_d: f64,
     /// TOPP-RA peer, if available (fills `toppra_ratio`).
     pub toppra: Option<ToppraPeer>,
     /// Field and distance blend of the curvilinear paths (see [`PocketParams`]).
@@ -297,6 +390,7 @@ impl Default for BenchConfig {
             l_over_d: vec![0.5, 1.0, 2.0, 4.0, 10.0],
             pockets: Vec::new(),
             adaptive: AdaptivePeer::detect(),
+            adaptive_max_l_over_d: f64::INFINITY,
             toppra: ToppraPeer::detect(),
             field: crate::Field::Poisson,
             distance_blend: 0.0,
@@ -305,11 +399,13 @@ impl Default for BenchConfig {
 }
 
 impl BenchConfig {
-    /// The set `thinplan bench pockets` runs: every bench pocket at L/D = 0.5, 1, 4, 10
-    /// (FreeCAD Adaptive takes minutes per pocket at L/D 40 and 100).
+    /// The set `thinplan bench pockets` runs: every bench pocket at L/D = 0.5, 1, 2, 4, 10,
+    /// 20, 40, 100 (Bieterman's range), FreeCAD Adaptive up to L/D 10 (it takes minutes per
+    /// pocket at 40 and 100; null above).
     pub fn cli() -> Self {
         BenchConfig {
-            l_over_d: vec![0.5, 1.0, 4.0, 10.0],
+            l_over_d: vec![0.5, 1.0, 2.0, 4.0, 10.0, 20.0, 40.0, 100.0],
+            adaptive_max_l_over_d: 10.0,
             ..BenchConfig::default()
         }
     }
@@ -367,8 +463,12 @@ pub struct BenchRow {
     /// Lower bound on the spiral's turns for any orbit spacing with gap ≤ stepover and the
     /// same first turn ([`crate::PocketPath::turns_lower_bound`]); null for a fallback.
     pub curvilinear_turns_bound: Option<usize>,
-    /// Schedule time / TOPP-RA time (to be filled by the TOPP-RA peer).
+    /// Our schedule's time over TOPP-RA's on the whole curvilinear path, the same curve on
+    /// both sides, piece by piece between corner stops ([`toppra_ratios`]); null without the
+    /// peer.
     pub toppra_ratio: Option<f64>,
+    /// The same with our schedule on the path's own points ([`ToppraRatios::native`]).
+    pub toppra_ratio_native: Option<f64>,
 }
 
 /// Parameters used for a bench pocket: tool = width / 6, stepover 40 % and finishing 10 % of
@@ -385,7 +485,7 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
         .unwrap_or(cfg.limits.v_max[0].min(cfg.limits.v_max[1]));
     let mut rows = Vec::new();
     let tlim = ToppraPeer::limits(&cfg.limits);
-    let mut topp: Vec<(usize, String, Vec<DVec2>, f64)> = Vec::new();
+    let mut topp: Vec<(usize, Vec<DVec2>)> = Vec::new();
     for &ld in &cfg.l_over_d {
         let l = ld * d;
         for bp in bench_family(l) {
@@ -408,7 +508,11 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                 time_s: t.total_time,
                 max_gap_mm: Some(p.max_gap),
             };
-            let adaptive = cfg.adaptive.as_ref().and_then(|peer| {
+            let adaptive = cfg
+                .adaptive
+                .as_ref()
+                .filter(|_| ld <= cfg.adaptive_max_l_over_d);
+            let adaptive = adaptive.and_then(|peer| {
                 peer.run(&bp.pocket, &params).ok().map(|pts| {
                     let t = time_path(&pts, feed, &cfg.limits);
                     PathStats {
@@ -419,16 +523,7 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                 })
             });
             if cfg.toppra.is_some() {
-                let sub = toppra_comparable(&cur, tlim.corner_angle_deg);
-                if sub.len() >= 4 {
-                    let ours = time_path(&sub, 1e6, &tlim).total_time;
-                    topp.push((
-                        rows.len(),
-                        format!("{} L/D={ld}", bp.pocket.name),
-                        sub,
-                        ours,
-                    ));
-                }
+                topp.push((rows.len(), cur.points.clone()));
             }
             rows.push(BenchRow {
                 pocket: bp.pocket.name.clone(),
@@ -458,18 +553,17 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                 offset_rings: off.contours.len().saturating_sub(1),
                 curvilinear_turns_bound: cur.turns_lower_bound(params.stepover),
                 toppra_ratio: None,
+                toppra_ratio_native: None,
             });
         }
     }
     if let (Some(peer), false) = (&cfg.toppra, topp.is_empty()) {
-        let paths: Vec<(String, Vec<DVec2>)> = topp
-            .iter()
-            .map(|(_, n, p, _)| (n.clone(), p.clone()))
-            .collect();
-        match peer.times(&paths, &tlim) {
-            Ok(times) => {
-                for ((row, _, _, ours), t) in topp.iter().zip(times) {
-                    rows[*row].toppra_ratio = t.filter(|t| *t > 0.0).map(|t| ours / t);
+        let paths: Vec<Vec<DVec2>> = topp.iter().map(|(_, p)| p.clone()).collect();
+        match toppra_ratios(peer, &paths, &tlim) {
+            Ok(ratios) => {
+                for ((row, _), r) in topp.iter().zip(ratios) {
+                    rows[*row].toppra_ratio = r.map(|r| r.same_curve);
+                    rows[*row].toppra_ratio_native = r.map(|r| r.native);
                 }
             }
             Err(e) => eprintln!("TOPP-RA peer failed: {e}"),
@@ -486,10 +580,10 @@ pub fn format_table(rows: &[BenchRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<17} {:>5} {:>6} {:>5} {:>5} | {:>6} {:>6} | {:>7} {:>6} {:>11} | {:>6} {:>6} | {:>6} | {:>5} {:>7} {:>6} | {:>6} {:>6} {:>6} | {:>10} | {:>6}",
+        "{:<17} {:>5} {:>6} {:>5} {:>5} | {:>6} {:>6} | {:>7} {:>6} {:>11} | {:>6} {:>6} | {:>6} | {:>5} {:>7} {:>6} | {:>6} {:>6} {:>6} | {:>10} | {:>13}",
         "pocket", "L/D", "L mm", "tool", "step", "off mm", "off s", "curv mm", "curv s", "method",
         "adp mm", "adp s", "shrp s", "s'", "gapm mm", "gapm s", "save%", "sharp", "gapm",
-        "turns/bd/r", "TOPP-RA"
+        "turns/bd/r", "TOPP-RA s/n"
     );
     for r in rows {
         let (am, at) = match &r.adaptive {
@@ -510,7 +604,7 @@ pub fn format_table(rows: &[BenchRow]) -> String {
         );
         let _ = writeln!(
             s,
-            "{:<17} {:>5.1} {:>6.1} {:>5.2} {:>5.2} | {:>6.0} {:>6.2} | {:>7.0} {:>6.2} {:>11} | {:>6} {:>6} | {:>6.2} | {:>5.2} {:>7.0} {:>6.2} | {:>6.1} {:>6.1} {:>6.1} | {:>10} | {:>6}",
+            "{:<17} {:>5.1} {:>6.1} {:>5.2} {:>5.2} | {:>6.0} {:>6.2} | {:>7.0} {:>6.2} {:>11} | {:>6} {:>6} | {:>6.2} | {:>5.2} {:>7.0} {:>6.2} | {:>6.1} {:>6.1} {:>6.1} | {:>10} | {:>13}",
             r.pocket,
             r.l_over_d,
             r.size_mm,
@@ -531,9 +625,10 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.saving_vs_sharp_pct,
             r.saving_vs_gap_matched_pct,
             turns,
-            r.toppra_ratio
-                .map(|x| format!("{x:.4}"))
-                .unwrap_or_else(|| "-".into())
+            match (r.toppra_ratio, r.toppra_ratio_native) {
+                (Some(a), Some(b)) => format!("{a:.4}/{b:.4}"),
+                _ => "-".into(),
+            }
         );
     }
     s
