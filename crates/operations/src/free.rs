@@ -133,5 +133,61 @@ pub(crate) fn free_space(plan: &Plan, i: usize, margin: f64) -> Option<Shapes> {
     }
     let free = free.unwrap_or_default();
     let free: Shapes = free.overlay_as::<i64>(&outside, OverlayRule::Union, FillRule::NonZero);
-    Some(free)
+    Some(without_slits(free))
+}
+
+/// The shapes without zero-width slits and spikes: where two features'
+/// shared edges differ in the last bits the union keeps a crack that is no
+/// product, yet the safety net would keep the tool r from it.
+fn without_slits(shapes: Shapes) -> Shapes {
+    let tiny = 1e-6;
+    let clean = |c: &Vec<[f64; 2]>| -> Vec<[f64; 2]> {
+        let mut pts = c.clone();
+        loop {
+            let n = pts.len();
+            if n < 3 {
+                return pts;
+            }
+            let drop = (0..n).find(|&i| {
+                let (a, b, q) = (pts[(i + n - 1) % n], pts[i], pts[(i + 1) % n]);
+                let (u, v) = ([b[0] - a[0], b[1] - a[1]], [q[0] - b[0], q[1] - b[1]]);
+                let (lu, lv) = (u[0].hypot(u[1]), v[0].hypot(v[1]));
+                if lu < tiny || lv < tiny {
+                    return true;
+                }
+                // A spike: out and straight back.
+                let cross = (u[0] * v[1] - u[1] * v[0]) / (lu * lv);
+                let dot = (u[0] * v[0] + u[1] * v[1]) / (lu * lv);
+                cross.abs() < 1e-9 && dot < 0.0
+            });
+            match drop {
+                Some(i) => {
+                    pts.remove(i);
+                }
+                None => return pts,
+            }
+        }
+    };
+    let area = |c: &Vec<[f64; 2]>| {
+        let n = c.len();
+        (0..n)
+            .map(|i| c[i][0] * c[(i + 1) % n][1] - c[(i + 1) % n][0] * c[i][1])
+            .sum::<f64>()
+            / 2.0
+    };
+    shapes
+        .into_iter()
+        .filter_map(|shape| {
+            let mut out: Vec<Vec<[f64; 2]>> = Vec::new();
+            for (k, c) in shape.iter().enumerate() {
+                let c = clean(c);
+                if c.len() >= 3 && area(&c).abs() > tiny {
+                    out.push(c);
+                } else if k == 0 {
+                    return None;
+                }
+            }
+            Some(out)
+        })
+        .collect()
 }

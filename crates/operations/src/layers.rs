@@ -25,6 +25,23 @@ pub(crate) struct Env<'a> {
     pub global_top: f64,
 }
 
+impl<'a> Env<'a> {
+    /// The same environment with another tool set.
+    pub fn clone_with_tools<'b>(&self, tools: &'b ToolSet) -> Env<'b>
+    where
+        'a: 'b,
+    {
+        Env {
+            k: self.k,
+            tools,
+            material: self.material,
+            machine: self.machine,
+            limits: self.limits.clone(),
+            global_top: self.global_top,
+        }
+    }
+}
+
 /// An operation in the feature's local frame.
 pub(crate) struct LocalOp {
     pub method: String,
@@ -419,9 +436,33 @@ fn clipped_to_free(
             if c.len() < 3 {
                 continue;
             }
-            let mut p = Polyline::with_capacity(c.len(), true);
-            for q in c {
-                p.add(q[0], q[1], 0.0);
+            // Near-duplicate and collinear vertices (the overlay's seams)
+            // upset the offset: drop them.
+            let mut pts: Vec<DVec2> = c.iter().map(|q| DVec2::new(q[0], q[1])).collect();
+            loop {
+                let n = pts.len();
+                if n < 3 {
+                    break;
+                }
+                let drop = (0..n).find(|&i| {
+                    let (a, b, q) = (pts[(i + n - 1) % n], pts[i], pts[(i + 1) % n]);
+                    a.distance(b) < 1e-5
+                        || ((b - a).perp_dot(q - b)).abs() < 1e-9 * (1.0 + a.distance(q))
+                            && (b - a).dot(q - b) > 0.0
+                });
+                match drop {
+                    Some(i) => {
+                        pts.remove(i);
+                    }
+                    None => break,
+                }
+            }
+            if pts.len() < 3 {
+                continue;
+            }
+            let mut p = Polyline::with_capacity(pts.len(), true);
+            for q in &pts {
+                p.add(q.x, q.y, 0.0);
             }
             // Slivers far thinner than the tool vanish in the offset anyway.
             if p.area().abs() < 1e-9 * d * d {
@@ -1571,13 +1612,19 @@ fn check(
             if p.z < z_min - 1e-9 {
                 return Err(format!("a move goes below the floor at z {:.4}", p.z));
             }
-            let dist = product_distance(p.truncate(), &g.product)
-                .min(product_distance(p.truncate(), &g.keep_out));
+            let own = product_distance(p.truncate(), &g.product);
+            let other = product_distance(p.truncate(), &g.keep_out);
+            let dist = own.min(other);
             if dist < g.r - EPS {
+                let which = if own <= other {
+                    "product edge"
+                } else {
+                    "free-space boundary (other product)"
+                };
                 return Err(format!(
-                    "a move would touch product: tool centre ({:.3}, {:.3}) is {:.4} mm from a \
-                     product edge, tool radius {:.3}",
-                    p.x, p.y, dist, g.r
+                    "a move would touch product: tool centre ({:.3}, {:.3}) of a {:?} move is \
+                     {:.4} mm from a {which}, tool radius {:.3}",
+                    p.x, p.y, mv.kind, dist, g.r
                 ));
             }
         }

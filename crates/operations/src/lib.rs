@@ -179,12 +179,46 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
             // A geometry library panicking on an awkward profile
             // (cavalier_contours asserts on some degenerate offsets) refuses
             // this feature, not the plan.
-            let m = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                layers::feature_operations(f, &env, free.as_ref())
-            }))
-            .unwrap_or_else(|_| {
-                Err("the offset geometry failed on this profile (library panic)".into())
-            });
+            let attempt = |env: &layers::Env| {
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    layers::feature_operations(f, env, free.as_ref())
+                }))
+                .unwrap_or_else(|_| {
+                    Err("the offset geometry failed on this profile (library panic)".into())
+                })
+            };
+            let mut m = attempt(&env);
+            // A path the safety net refused with one tool may pass with a
+            // smaller one: retry without the largest tools, one at a time.
+            let mut fewer = tools.clone();
+            while matches!(&m, Err(e) if !e.starts_with(layers::NO_TOOL_FITS))
+                && fewer.tools.len() > 1
+            {
+                let largest = fewer
+                    .tools
+                    .iter()
+                    .enumerate()
+                    .max_by(|a, b| {
+                        a.1.diameter
+                            .total_cmp(&b.1.diameter)
+                            .then_with(|| b.1.id.cmp(&a.1.id))
+                    })
+                    .map(|(k, _)| k)
+                    .expect("more than one tool");
+                let dropped = fewer.tools.remove(largest);
+                let first = m.as_ref().err().cloned().unwrap_or_default();
+                let sub = env.clone_with_tools(&fewer);
+                m = attempt(&sub);
+                if let Ok(made) = &mut m {
+                    made.warnings.insert(
+                        0,
+                        format!(
+                            "{}: without {} ({first}); a smaller tool is used",
+                            f.id, dropped.id
+                        ),
+                    );
+                }
+            }
             made[i] = Some(m);
         }
         let mut changed = false;
