@@ -58,6 +58,9 @@ pub struct ThinplanApp {
     expanded: BTreeSet<Entity>,
     /// The selection the tree last scrolled to.
     tree_scrolled_to: Option<Entity>,
+    /// The tree's rows for (plan generation, opened nodes): rebuilt only
+    /// when either changes, not every frame (ten thousand features).
+    tree_cache: Option<(u64, BTreeSet<Entity>, TreeRows)>,
     /// Simulation on/off and position (kept when the plan changes if it fits).
     pub simulate: bool,
     pub sim_index: usize,
@@ -144,6 +147,7 @@ impl ThinplanApp {
             forms: Forms::default(),
             expanded: BTreeSet::from([Entity::Part, Entity::Setup]),
             tree_scrolled_to: None,
+            tree_cache: None,
             simulate: false,
             sim_index: 0,
             file_dialog: None,
@@ -484,13 +488,21 @@ impl ThinplanApp {
             state,
             expanded,
             tree_scrolled_to,
+            tree_cache,
             ..
         } = self;
         let Some(plan) = state.plan() else {
             ui.label("no part open");
             return;
         };
-        let rows = tree_rows(plan, expanded, state.selection);
+        open_path_to(plan, expanded, state.selection);
+        let fresh =
+            matches!(tree_cache, Some((g, e, _)) if *g == state.plan_generation && e == expanded);
+        if !fresh {
+            let rows = std::sync::Arc::new(tree_rows(plan, expanded));
+            *tree_cache = Some((state.plan_generation, expanded.clone(), rows));
+        }
+        let rows = tree_cache.as_ref().map(|c| c.2.clone()).unwrap_or_default();
         let mut area = egui::ScrollArea::vertical().auto_shrink(false);
         if state.selection != *tree_scrolled_to {
             if let Some(i) = rows.iter().position(|r| Some(r.1) == state.selection) {
@@ -986,22 +998,27 @@ fn editor(ui: &mut egui::Ui, forms: &mut Forms, plan: &Plan, sel: Entity, acts: 
                 ));
             }
             let owner = relations::mf(plan, id).map(|f| f.owner);
-            let same_owner: Vec<thinplan_plan::MachiningFeatureId> = plan
-                .machining_features
-                .iter()
-                .filter(|f| Some(f.owner) == owner && f.id != id)
-                .map(|f| f.id)
-                .collect();
-            if forms.merge_with.is_none_or(|m| !same_owner.contains(&m)) {
-                forms.merge_with = same_owner.first().copied();
+            // The other features of the owner, listed only while the list is
+            // open (a wall may own thousands).
+            let same_owner = || {
+                plan.machining_features
+                    .iter()
+                    .filter(move |f| Some(f.owner) == owner && f.id != id)
+                    .map(|f| f.id)
+            };
+            let valid = |m: thinplan_plan::MachiningFeatureId| {
+                m != id && relations::mf(plan, m).is_some_and(|g| Some(g.owner) == owner)
+            };
+            if forms.merge_with.is_none_or(|m| !valid(m)) {
+                forms.merge_with = same_owner().next();
             }
             ui.horizontal(|ui| {
                 ui.label("merge with");
                 egui::ComboBox::from_id_salt("merge with")
                     .selected_text(forms.merge_with.map_or("—".into(), |m| m.to_string()))
                     .show_ui(ui, |ui| {
-                        for m in &same_owner {
-                            ui.selectable_value(&mut forms.merge_with, Some(*m), m.to_string());
+                        for m in same_owner() {
+                            ui.selectable_value(&mut forms.merge_with, Some(m), m.to_string());
                         }
                     });
                 if ui
@@ -1248,14 +1265,11 @@ mod drawing {
     }
 }
 
-/// The tree as a flat list of visible rows `(depth, entity, has children)`,
-/// drawn lazily (only the rows in view), so ten thousand features cost what
-/// a screenful does. The path to the selection is opened (coupling).
-fn tree_rows(
-    plan: &Plan,
-    expanded: &mut BTreeSet<Entity>,
-    selection: Option<Entity>,
-) -> Vec<(usize, Entity, bool)> {
+/// The tree's visible rows `(depth, entity, has children)`, shared.
+type TreeRows = std::sync::Arc<Vec<(usize, Entity, bool)>>;
+
+/// Opens the tree's path down to the selection (coupling).
+fn open_path_to(plan: &Plan, expanded: &mut BTreeSet<Entity>, selection: Option<Entity>) {
     if let Some(sel) = selection {
         let mut up = relations::owner(plan, sel);
         while let Some(o) = up {
@@ -1267,6 +1281,12 @@ fn tree_rows(
             expanded.insert(Entity::Setup);
         }
     }
+}
+
+/// The tree as a flat list of visible rows `(depth, entity, has children)`,
+/// drawn lazily (only the rows in view), so ten thousand features cost what
+/// a screenful does.
+fn tree_rows(plan: &Plan, expanded: &BTreeSet<Entity>) -> Vec<(usize, Entity, bool)> {
     let mut rows = vec![(0, Entity::Part, true)];
     if !expanded.contains(&Entity::Part) {
         return rows;

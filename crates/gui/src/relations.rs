@@ -56,12 +56,23 @@ pub fn kind_name(k: StiffnessKind) -> &'static str {
     }
 }
 
+/// Stages write features in id order, so a binary search finds them (views
+/// look features up for every row they draw); a plan out of order still
+/// finds them by the linear search (ids are unique, so a hit is right).
 pub fn sf(plan: &Plan, id: StiffnessFeatureId) -> Option<&StiffnessFeature> {
-    plan.stiffness_features.iter().find(|f| f.id == id)
+    let v = &plan.stiffness_features;
+    match v.binary_search_by_key(&id, |f| f.id) {
+        Ok(i) => Some(&v[i]),
+        Err(_) => v.iter().find(|f| f.id == id),
+    }
 }
 
 pub fn mf(plan: &Plan, id: MachiningFeatureId) -> Option<&MachiningFeature> {
-    plan.machining_features.iter().find(|f| f.id == id)
+    let v = &plan.machining_features;
+    match v.binary_search_by_key(&id, |f| f.id) {
+        Ok(i) => Some(&v[i]),
+        Err(_) => v.iter().find(|f| f.id == id),
+    }
 }
 
 pub fn provenance(plan: &Plan, e: Entity) -> Option<&Provenance> {
@@ -363,5 +374,19 @@ mod tests {
             }
         }
         assert!(n > 0);
+        // Lookups find every feature, in id order or shuffled.
+        let mut p = s.plan.clone();
+        for f in &s.plan.machining_features {
+            assert_eq!(mf(&p, f.id), Some(f));
+        }
+        p.machining_features.reverse();
+        p.stiffness_features.reverse();
+        for f in &s.plan.machining_features {
+            assert_eq!(mf(&p, f.id), Some(f));
+        }
+        for f in &s.plan.stiffness_features {
+            assert_eq!(sf(&p, f.id), Some(f));
+        }
+        assert!(mf(&p, MachiningFeatureId(u32::MAX)).is_none());
     }
 }
