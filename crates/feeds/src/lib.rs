@@ -642,13 +642,68 @@ fn climb_line((alpha, beta): (f64, f64), ua: f64, ub: f64) -> (f64, f64) {
     (dist, time)
 }
 
+/// Where the conservative in-segment model cannot connect the end speeds (the ramp between
+/// them is feasible only under the segment constraints, with curvature linear along the
+/// segment): the profile `max(ramp, F)` accelerating from the lower end speed at `a⁺(u)`
+/// (`lines`) while that is above the ramp, then on the ramp — feasible piece by piece, and
+/// higher than either for given end speeds, so still never slower for a faster machine.
+/// For `u0 > u1` the same, mirrored (`lines` then the deceleration lines).
+fn ramp_hybrid_time(u0: f64, u1: f64, lines: &[(f64, f64)], ds: f64) -> f64 {
+    let (lo, hi) = (u0.min(u1), u0.max(u1));
+    let ramp = |ua: f64, ub: f64, d: f64| {
+        let v = ua.sqrt() + ub.sqrt();
+        if v > 0.0 {
+            2.0 * d / v
+        } else {
+            f64::INFINITY
+        }
+    };
+    let a_at = |u: f64| {
+        lines
+            .iter()
+            .map(|l| l.0 - l.1 * u)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let slope = (hi - lo) / ds; // du/dσ of the ramp
+    if hi <= lo || 2.0 * a_at(lo) <= slope {
+        return ramp(lo, hi, ds);
+    }
+    // g(u) = distance for F to reach u − distance for the ramp: convex, g(lo) = 0, g'(lo) < 0,
+    // g(hi) > 0 (F cannot reach hi in ds): its other root by Newton from hi (from the right,
+    // monotone), bisection as a safeguard.
+    let g = |u: f64| climb(lines, lo, u).0 - (u - lo) / slope;
+    let (mut a, mut b) = (lo, hi);
+    let mut u = hi;
+    for _ in 0..100 {
+        let gu = g(u);
+        if gu > 0.0 {
+            b = u;
+        } else {
+            a = u;
+        }
+        let d = 0.5 / a_at(u) - 1.0 / slope;
+        let mut un = if d > 0.0 { u - gu / d } else { 0.5 * (a + b) };
+        if !(un > a && un < b) {
+            un = 0.5 * (a + b);
+        }
+        if (un - u).abs() <= 1e-14 * u {
+            break;
+        }
+        u = un;
+    }
+    let u = b; // on the ramp side of the crossing (F has reached at least the ramp there)
+    let (dist, time) = climb(lines, lo, u);
+    let dist = dist.min(ds);
+    time + ramp(u, hi, ds - dist)
+}
+
 /// Fastest time over a curved segment between end speeds² `u0` and `u1` under the
 /// conservative in-segment model (both end curvatures at every speed, speed² ≤ vc²):
 /// `u(σ) = min(F(σ), B(σ), vc²)` with `F` accelerating from `u0` at `a⁺(u)` and `B`
 /// decelerating into `u1`, both solved in closed form, their meeting level by safeguarded
-/// Newton (the distance to reach a level is convex in it). Infinite when that model cannot
-/// connect the end speeds (the ramp then times the segment). The exact optimum of a problem
-/// whose constraints only loosen with the limits, so a faster machine is never slower here.
+/// Newton (the distance to reach a level is convex in it). Where that model cannot connect the
+/// end speeds, [`ramp_hybrid_time`]. The exact optimum of a problem whose constraints only
+/// loosen with the limits, so a faster machine is never slower here for given end speeds.
 fn curved_segment_time(u0: f64, u1: f64, w: &Work, c_far: &DVec3, limits: &MachineLimits) -> f64 {
     let (lf, nf) = accel_lines(w, c_far, 1.0, limits);
     let (lb, nb) = accel_lines(w, c_far, -1.0, limits);
@@ -663,7 +718,7 @@ fn curved_segment_time(u0: f64, u1: f64, w: &Work, c_far: &DVec3, limits: &Machi
     let lo = u0.max(u1);
     let (d_lo, t_lo) = reach(lo);
     if d_lo > ds * (1.0 + 1e-12) {
-        return f64::INFINITY;
+        return ramp_hybrid_time(u0, u1, if u1 >= u0 { lf } else { lb }, ds);
     }
     if d_lo >= ds {
         return t_lo;
