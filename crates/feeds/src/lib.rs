@@ -50,8 +50,9 @@
 //!    normal cap `min_k A_k/|c_jk|` and `A_c/κ_j` of both ends), where `F` accelerates from
 //!    `u_i` at the largest acceleration `a⁺(u)` (a concave piecewise-linear function of `u`)
 //!    and `B` decelerates into `u_{i+1}`: closed form per linear piece, the meeting level by
-//!    safeguarded Newton. (Until 2026-11-23 a constant acceleration up to the cap was used:
-//!    a heuristic whose rate fell as the cap rose, so a faster machine could be slower.)
+//!    safeguarded Newton; where that model cannot connect the end speeds, `max(ramp, F)`.
+//!    (Until 2026-11-23 a constant acceleration up to the cap was used: a heuristic whose
+//!    rate fell as the cap rose, so a faster machine could be slower.)
 //!    Long straight segments are thus timed exactly, however coarse the point spacing.
 //!
 //! **Tangential acceleration (the choice the design leaves open).** The available tangential
