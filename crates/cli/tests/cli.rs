@@ -452,16 +452,35 @@ fn plan_json_machining_features_follow_the_contract() {
     }
 }
 
+/// Material (mm³) the stock simulation may still find missed per sample,
+/// beyond the 0.05 mm tolerance, and why (issue 5: the final stock equals
+/// the part except where no tool reaches). Before the stage-7 fixes of
+/// this list: crossing_ribs 642 000, tall_rib 68 624, chamfered_rib 68 646,
+/// isogrid 60 211, wall_holes 57 862, wing_rib 5 758, flange_cutouts 165,
+/// flange_web_slot 49, pentagon_pocket 2.
+const MISSED_ALLOWANCE: &[(&str, f64, &str)] = &[
+    ("chamfered_rib", 15.0, "cells along the rib foot where the Ø20's 1 mm corner radius leaves more than the Ø12's 0.5 mm the ideal uses"),
+    ("crossing_ribs", 800.0, "two-cell columns in the rib junctions' corners and the Ø20's corner-radius fillet along rib feet"),
+    ("flange_cutouts", 150.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab; the ideal reaches a little further"),
+    ("flange_web_slot", 60.0, "the Ø20's 1 mm corner-radius fillet along the flange foot (the Ø12, 0.5 mm, is the ideal there)"),
+    ("isogrid", 3500.0, "R5 pocket corners (remaining-material features no tool fits) that the Ø12 reaches partly from the pocket; in debug builds cavalier_contours asserts on one feature's offset (MF142, about 440 mm³) that release builds mill"),
+    ("pentagon_pocket", 1.0, "single 0.2 mm cells at the corners (the ideal is evaluated at cell centres)"),
+    ("tall_rib", 1.0, "single cells at the rib's ends"),
+    ("wall_holes", 1.0, "single cells at the wall's ends"),
+    ("wing_rib", 550.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) and cells in the pockets' sharp corners"),
+];
+
 /// The whole pipeline to G-code, replayed by the independent stock
-/// simulation: no gouge and no rapid into stock (material left behind is
-/// reported, not asserted: stage 7 still refuses some features).
-fn assert_no_gouge(names: &[&str]) {
+/// simulation: no gouge, no rapid into stock, missed material within the
+/// sample's allowance, and every feature stage 7 gives no operation is
+/// reported as unreachable (rule `operations.unreachable`, with the reason).
+fn assert_machined(names: &[&str]) {
     for &name in names {
         let d = tmp(&format!("gcode-{name}"));
-        let (ngc, tbl) = (d.join("p.ngc"), d.join("p.tbl"));
+        let (ngc, tbl, plan) = (d.join("p.ngc"), d.join("p.tbl"), d.join("p.json"));
         let status = thinplan()
             .args(["plan", &format!("builtin:{name}"), "--out"])
-            .arg(d.join("p.json"))
+            .arg(&plan)
             .arg("--gcode")
             .arg(&ngc)
             .arg("--tool-table")
@@ -487,17 +506,41 @@ fn assert_no_gouge(names: &[&str]) {
             v["crashes"]
         );
         assert!(v["removed_volume_mm3"].as_f64().unwrap() > 0.0);
+        let missed = v["leftover_missed"]["volume_mm3"].as_f64().unwrap();
+        let (allowed, why) = MISSED_ALLOWANCE
+            .iter()
+            .find(|(n, _, _)| *n == name)
+            .map(|(_, a, w)| (*a, *w))
+            .unwrap_or((
+                0.0,
+                "no allowance: a new sample must leave nothing a tool reaches",
+            ));
+        assert!(
+            missed <= allowed,
+            "{name}: {missed:.1} mm³ missed > {allowed} allowed ({why}); regions {}",
+            v["leftover_missed"]["regions"]
+        );
+        let p: Value = serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
+        for r in p["refusals"].as_array().unwrap() {
+            if r["stage"] == "operations" {
+                assert_eq!(r["rule"], "operations.unreachable", "{name}: {r}");
+                assert!(
+                    r["reason"].as_str().unwrap().contains("unreachable"),
+                    "{name}: {r}"
+                );
+            }
+        }
     }
 }
 
-/// Every sample: the program replayed on a Z-map never cuts the part and
-/// never rapids into stock. (Material left behind is a known gap: stage 7
-/// still refuses some features; issue 5.)
+/// Every sample: the program replayed on a Z-map never cuts the part,
+/// never rapids into stock, and leaves only what no tool reaches (within
+/// the per-sample allowance above).
 #[test]
 fn every_sample_program_never_gouges() {
     // Every bundled sample, so a new one is covered without editing here.
     let names: Vec<&str> = thinplan_import::SAMPLES.iter().map(|(n, _)| *n).collect();
-    assert_no_gouge(&names);
+    assert_machined(&names);
 }
 
 #[test]
