@@ -1518,24 +1518,26 @@ fn enter(
     let p0 = block[0];
     let need = (z_from - z) / angle.tan();
     let (mut best, mut best_len) = (p0, 0.0);
+    let limit = need.max(min_len);
+    let h = STEP / 2.0;
+    let ok = |p: DVec2| inside(p, &g.centre_polys) || boundary_distance(p, &g.centre_polys) < 1e-6;
     for k in 0..24 {
         let u = DVec2::from_angle(std::f64::consts::TAU * k as f64 / 24.0);
-        let (mut lo, mut hi) = (0.0, need.max(min_len));
-        if segment_inside(p0, p0 + u * hi, &g.centre_polys, STEP / 2.0) {
-            lo = hi;
-        } else {
-            for _ in 0..20 {
-                let mid = 0.5 * (lo + hi);
-                if segment_inside(p0, p0 + u * mid, &g.centre_polys, STEP / 2.0) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
+        // Walk out in half-steps until the run leaves the region.
+        let mut len = 0.0;
+        while len < limit {
+            let next = (len + h).min(limit);
+            if !ok(p0 + u * next) {
+                break;
             }
+            len = next;
         }
-        if lo > best_len + 1e-9 {
-            best_len = lo;
-            best = p0 + u * lo;
+        if len > best_len + 1e-9 {
+            best_len = len;
+            best = p0 + u * len;
+        }
+        if best_len >= limit {
+            break;
         }
     }
     ramp(b, &[p0, best], z_from, z, angle, min_len, kind)
