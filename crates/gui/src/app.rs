@@ -7,11 +7,14 @@ use std::path::PathBuf;
 
 use eframe::egui::{self, Color32, RichText};
 use thinplan_pipeline::SetupRequest;
-use thinplan_plan::{ConstraintKind, Plan, Stage, StiffnessFeatureId, WallRole};
+use thinplan_plan::{
+    ConnectionKind, ConstraintKind, Plan, Region3, Stage, StiffnessFeatureId, WallRole,
+};
 
+use crate::conditions;
 use crate::network::NetworkView;
 use crate::relations;
-use crate::state::{kind_word, AppState, Entity};
+use crate::state::{connection_word, kind_word, AppState, Entity};
 use crate::viewport::Viewport;
 
 const ROW_H: f32 = 18.0;
@@ -47,6 +50,22 @@ struct Forms {
     filled_for: Option<(Entity, u64)>,
     other: Option<StiffnessFeatureId>,
     kind: Option<ConstraintKind>,
+    /// A connection to add: the other feature and how the selected one
+    /// stands to it.
+    connect_to: Option<StiffnessFeatureId>,
+    connect_as: ConnectAs,
+    /// The feed (mm/min) of each kind of move of the selected operation.
+    feeds: Vec<(Region3, f64)>,
+}
+
+/// How the selected stiffness feature stands to the one it is connected to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ConnectAs {
+    /// The selected feature is the base; the other is its leaf.
+    #[default]
+    Base,
+    Leaf,
+    Crossing,
 }
 
 pub struct ThinplanApp {
@@ -298,6 +317,24 @@ impl ThinplanApp {
     }
 
     /// Sets the drawn profile's points as if typed (`x, y; …`; tests).
+    /// The feature the inspector's "Add connection" connects to (tests:
+    /// the combo box lists every feature).
+    pub fn set_connect_to(&mut self, other: StiffnessFeatureId) {
+        self.forms.connect_to = Some(other);
+    }
+
+    /// The value in the inspector's feed field for one kind of move.
+    pub fn set_feed_field(&mut self, region: Region3, feed: f64) {
+        if let Some(f) = self.forms.feeds.iter_mut().find(|(r, _)| *r == region) {
+            f.1 = feed;
+        }
+    }
+
+    /// The value in the inspector's spindle field.
+    pub fn set_spindle_field(&mut self, rpm: f64) {
+        self.forms.spindle = rpm;
+    }
+
     pub fn set_draw_points(&mut self, text: &str) {
         self.forms.draw_text = text.to_string();
     }
@@ -587,6 +624,10 @@ impl ThinplanApp {
             Entity::Operation(id) => {
                 if let Some(o) = plan.operations.iter().find(|o| o.id == id) {
                     self.forms.spindle = o.spindle_rpm;
+                    self.forms.feeds = conditions::feeds(o)
+                        .into_iter()
+                        .map(|(r, lo, _)| (r, lo))
+                        .collect();
                 }
             }
             _ => {}
@@ -674,6 +715,38 @@ impl ThinplanApp {
                             row("method", o.method.clone());
                             row("tool", o.tool.clone());
                             row("spindle rpm", format!("{:.0}", o.spindle_rpm));
+                            let flutes = state
+                                .knowledge()
+                                .and_then(|k| conditions::limits(plan, k, o).ok())
+                                .and_then(|l| l.flutes);
+                            for (r, lo, hi) in conditions::feeds(o) {
+                                let mut v = if lo == hi {
+                                    format!("{lo:.0}")
+                                } else {
+                                    format!("{lo:.0} – {hi:.0}")
+                                };
+                                if let (
+                                    Some(z),
+                                    Region3::Boundary | Region3::FullCut | Region3::Rest,
+                                ) = (flutes, r)
+                                {
+                                    let fz = conditions::feed_per_tooth(hi, o.spindle_rpm, z);
+                                    v.push_str(&format!("  ({fz:.4} mm/tooth)"));
+                                }
+                                row(&format!("{} feed mm/min", conditions::region_name(r)), v);
+                            }
+                            let pv = |k: &str| o.provenance.values.get(k).copied();
+                            for (k, name) in [
+                                ("stepover_rest_mm", "stepover rest mm"),
+                                ("stepover_boundary_mm", "stepover boundary mm"),
+                                ("depth_of_cut_mm", "depth of cut mm"),
+                                ("layers", "layers"),
+                                ("time_s", "time s"),
+                            ] {
+                                if let Some(v) = pv(k) {
+                                    row(name, format!("{v:.3}"));
+                                }
+                            }
                             row("moves", o.moves.len().to_string());
                         }
                     }
@@ -784,6 +857,15 @@ impl ThinplanApp {
             }
             Act::Spindle(id, rpm) => {
                 s.set_spindle(id, rpm);
+            }
+            Act::Feed(id, r, f) => {
+                s.set_feed(id, r, f);
+            }
+            Act::Connect(base, leaf, k) => {
+                s.add_connection(base, leaf, k);
+            }
+            Act::Disconnect(a, b) => {
+                s.remove_connection(a, b);
             }
         }
     }
@@ -915,6 +997,7 @@ fn editor(ui: &mut egui::Ui, forms: &mut Forms, plan: &Plan, sel: Entity, acts: 
                 }
             });
             drawing::draw_section(ui, forms, plan, id, acts);
+            connections_section(ui, forms, plan, id, acts);
             ui.label(RichText::new("Sequence constraints").strong());
             let mut remove = None;
             for (i, c) in plan.stiffness_constraints.iter().enumerate() {
@@ -1047,9 +1130,107 @@ fn editor(ui: &mut egui::Ui, forms: &mut Forms, plan: &Plan, sel: Entity, acts: 
                     acts.push(Act::Spindle(id, forms.spindle));
                 }
             });
+            for (r, feed) in &mut forms.feeds {
+                let name = conditions::region_name(*r);
+                ui.horizontal(|ui| {
+                    ui.label(format!("{name} feed mm/min"));
+                    ui.add(egui::DragValue::new(feed).speed(10.0).range(0.0..=1e6));
+                    if ui.button(format!("Set {name} feed")).clicked() {
+                        acts.push(Act::Feed(id, *r, *feed));
+                    }
+                });
+            }
+            ui.label(
+                RichText::new(
+                    "Stepover and depth of cut shape the tool path: stage 7 builds it for the \
+                     whole machining feature from its method in knowledge/methods.ron and cannot \
+                     rebuild one operation from the plan. Change the method and reload the \
+                     knowledge (the stages run again).",
+                )
+                .weak(),
+            );
         }
         _ => {}
     }
+}
+
+/// The connections of stiffness feature `id`, each removable, and a row to
+/// connect it to another one.
+fn connections_section(
+    ui: &mut egui::Ui,
+    forms: &mut Forms,
+    plan: &Plan,
+    id: StiffnessFeatureId,
+    acts: &mut Vec<Act>,
+) {
+    // Closed by default: a web may carry dozens of features.
+    let n = plan
+        .connections
+        .iter()
+        .filter(|c| c.base == id || c.leaf == id)
+        .count();
+    egui::CollapsingHeader::new(format!("Connections of {id} ({n})"))
+        .id_salt("connections")
+        .show(ui, |ui| {
+            for c in plan
+                .connections
+                .iter()
+                .filter(|c| c.base == id || c.leaf == id)
+            {
+                let other = if c.base == id { c.leaf } else { c.base };
+                ui.horizontal(|ui| {
+                    ui.label(format!(
+                        "{} {} {}  ({})",
+                        c.base,
+                        connection_word(c.kind),
+                        c.leaf,
+                        c.provenance.rule
+                    ));
+                    if ui.small_button(format!("disconnect {other}")).clicked() {
+                        acts.push(Act::Disconnect(id, other));
+                    }
+                });
+            }
+            ui.horizontal(|ui| {
+                ui.label(format!("{id}"));
+                let a = &mut forms.connect_as;
+                ui.selectable_value(a, ConnectAs::Base, "carries");
+                ui.selectable_value(a, ConnectAs::Leaf, "is carried by");
+                ui.selectable_value(a, ConnectAs::Crossing, "crosses");
+                let others = || {
+                    plan.stiffness_features
+                        .iter()
+                        .map(|f| f.id)
+                        .filter(move |o| *o != id)
+                };
+                if forms
+                    .connect_to
+                    .is_none_or(|o| o == id || relations::sf(plan, o).is_none())
+                {
+                    forms.connect_to = others().next();
+                }
+                egui::ComboBox::from_id_salt("connect to")
+                    .selected_text(forms.connect_to.map_or("—".into(), |o| o.to_string()))
+                    .show_ui(ui, |ui| {
+                        for o in others() {
+                            ui.selectable_value(
+                                &mut forms.connect_to,
+                                Some(o),
+                                format!("connect to {o}"),
+                            );
+                        }
+                    });
+                if ui.button("Add connection").clicked() {
+                    if let Some(o) = forms.connect_to {
+                        acts.push(match forms.connect_as {
+                            ConnectAs::Base => Act::Connect(id, o, ConnectionKind::BaseLeaf),
+                            ConnectAs::Leaf => Act::Connect(o, id, ConnectionKind::BaseLeaf),
+                            ConnectAs::Crossing => Act::Connect(id, o, ConnectionKind::Crossing),
+                        });
+                    }
+                }
+            });
+        });
 }
 
 /// What a panel asked for, applied after drawing (the plan is borrowed
@@ -1070,6 +1251,9 @@ enum Act {
     ),
     Draw(StiffnessFeatureId, Vec<glam::DVec2>, f64, f64),
     Spindle(thinplan_plan::OperationId, f64),
+    Feed(thinplan_plan::OperationId, Region3, f64),
+    Connect(StiffnessFeatureId, StiffnessFeatureId, ConnectionKind),
+    Disconnect(StiffnessFeatureId, StiffnessFeatureId),
 }
 
 /// A file name stem for exports from a part source (`builtin:wing_rib`,

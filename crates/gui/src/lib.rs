@@ -6,6 +6,7 @@
 //! `thinplan-sequence`'s cycle check.
 
 pub mod app;
+pub mod conditions;
 pub mod edit;
 pub mod network;
 pub mod relations;

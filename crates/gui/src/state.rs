@@ -12,8 +12,8 @@ use glam::DVec3;
 use thinplan_knowledge::Knowledge;
 use thinplan_pipeline::{ErrorKind, PipelineError, Session, SetupRequest};
 use thinplan_plan::{
-    Constraint, ConstraintKind, MachiningFeatureId, OperationId, Plan, Provenance,
-    ProvenanceSource, Stage, StiffnessFeatureId,
+    Connection, ConnectionKind, Constraint, ConstraintKind, MachiningFeatureId, OperationId, Plan,
+    Provenance, ProvenanceSource, Stage, StiffnessFeatureId,
 };
 
 /// One thing a view can show and select.
@@ -701,21 +701,123 @@ impl AppState {
         })
     }
 
-    /// Sets an operation's spindle speed.
-    pub fn set_spindle(&mut self, id: OperationId, rpm: f64) -> bool {
-        self.edit(&format!("{id} spindle {rpm:.0}"), |plan| {
-            if !(rpm.is_finite() && rpm > 0.0) {
-                return Err(format!("spindle speed must be positive, not {rpm}"));
+    /// An edit of one operation's cutting conditions, checked against the
+    /// machine's limits. Conditions feed only the program: the order (stage
+    /// 8) reads tools and constraints, not feeds or speeds, so nothing
+    /// before the output is invalidated.
+    fn conditions_edit(
+        &mut self,
+        id: OperationId,
+        label: &str,
+        f: impl FnOnce(&mut thinplan_plan::Operation, &crate::conditions::Limits) -> Result<(), String>,
+    ) -> bool {
+        let limits = match (self.plan(), self.knowledge()) {
+            (Some(plan), Some(k)) => match plan.operations.iter().find(|o| o.id == id) {
+                Some(op) => crate::conditions::limits(plan, k, op),
+                None => Err(format!("no {id}")),
+            },
+            _ => Err("no part open".into()),
+        };
+        let ok = match limits {
+            Ok(l) => self.edit(label, |plan| {
+                let op = plan
+                    .operations
+                    .iter_mut()
+                    .find(|o| o.id == id)
+                    .ok_or_else(|| format!("no {id}"))?;
+                f(op, &l)?;
+                Ok(Stage::Output)
+            }),
+            Err(e) => {
+                self.message = format!("{label}: {e}");
+                false
             }
-            let op = plan
-                .operations
-                .iter_mut()
-                .find(|o| o.id == id)
-                .ok_or_else(|| format!("no {id}"))?;
-            op.spindle_rpm = rpm;
-            op.provenance = user_edit("gui.edit.spindle", &op.provenance, None);
-            Ok(Stage::Order)
+        };
+        self.refusal = (!ok).then(|| format!("refused: {}", self.message));
+        ok
+    }
+
+    /// Sets an operation's spindle speed (at most the machine's).
+    pub fn set_spindle(&mut self, id: OperationId, rpm: f64) -> bool {
+        self.conditions_edit(id, &format!("{id} spindle {rpm:.0}"), |op, l| {
+            crate::conditions::set_spindle(op, rpm, l)
         })
+    }
+
+    /// Sets the feed (mm/min) of an operation's moves of one kind; its
+    /// time is recomputed.
+    pub fn set_feed(&mut self, id: OperationId, region: thinplan_plan::Region3, feed: f64) -> bool {
+        let name = crate::conditions::region_name(region);
+        self.conditions_edit(id, &format!("{id} {name} feed {feed:.0}"), |op, l| {
+            crate::conditions::set_feed(op, region, feed, l)
+        })
+    }
+
+    // ------------------------------------------------------------------
+    // Connections
+
+    /// Connects two stiffness features (`base` carries `leaf`, or the two
+    /// cross); sequencing and every later stage run again. A feature
+    /// connected to itself, an unknown feature, or a pair already
+    /// connected (either way round) is refused.
+    pub fn add_connection(
+        &mut self,
+        base: StiffnessFeatureId,
+        leaf: StiffnessFeatureId,
+        kind: ConnectionKind,
+    ) -> bool {
+        let word = connection_word(kind);
+        let ok = self.edit(&format!("connect {base} {word} {leaf}"), |plan| {
+            if !plan.stages_done.contains(&Stage::Recognise) {
+                return Err("refused: recognise the stiffness features first".into());
+            }
+            if base == leaf {
+                return Err(format!("refused: {base} cannot be connected to itself"));
+            }
+            for id in [base, leaf] {
+                if !plan.stiffness_features.iter().any(|f| f.id == id) {
+                    return Err(format!("refused: there is no stiffness feature {id}"));
+                }
+            }
+            if let Some(c) = plan
+                .connections
+                .iter()
+                .find(|c| (c.base, c.leaf) == (base, leaf) || (c.base, c.leaf) == (leaf, base))
+            {
+                return Err(format!(
+                    "refused: {} and {} are already connected ({} {} {})",
+                    base,
+                    leaf,
+                    c.base,
+                    connection_word(c.kind),
+                    c.leaf
+                ));
+            }
+            plan.connections.push(Connection {
+                base,
+                leaf,
+                kind,
+                provenance: Provenance::new(ProvenanceSource::User, "gui.connection"),
+            });
+            Ok(Stage::Sequence)
+        });
+        self.refusal = (!ok).then(|| self.message.clone());
+        ok
+    }
+
+    /// Removes the connection between `a` and `b` (either way round).
+    pub fn remove_connection(&mut self, a: StiffnessFeatureId, b: StiffnessFeatureId) -> bool {
+        let ok = self.edit(&format!("disconnect {a} and {b}"), |plan| {
+            let i = plan
+                .connections
+                .iter()
+                .position(|c| (c.base, c.leaf) == (a, b) || (c.base, c.leaf) == (b, a))
+                .ok_or_else(|| format!("refused: {a} and {b} are not connected"))?;
+            plan.connections.remove(i);
+            Ok(Stage::Sequence)
+        });
+        self.refusal = (!ok).then(|| self.message.clone());
+        ok
     }
 
     // ------------------------------------------------------------------
@@ -858,6 +960,14 @@ impl AppState {
     }
 }
 
+/// How a connection reads between its base and its leaf.
+pub fn connection_word(k: ConnectionKind) -> &'static str {
+    match k {
+        ConnectionKind::BaseLeaf => "carries",
+        ConnectionKind::Crossing => "crosses",
+    }
+}
+
 pub fn kind_word(k: ConstraintKind) -> &'static str {
     match k {
         ConstraintKind::Before => "before",
@@ -904,6 +1014,15 @@ pub fn changes(before: &Plan, after: &Plan) -> BTreeSet<Entity> {
         if !before.stiffness_constraints.contains(c) {
             out.insert(Entity::Stiffness(c.first));
             out.insert(Entity::Stiffness(c.second));
+        }
+    }
+    // Connections added or removed: both ends changed.
+    for (x, y) in [(after, before), (before, after)] {
+        for c in &x.connections {
+            if !y.connections.contains(c) {
+                out.insert(Entity::Stiffness(c.base));
+                out.insert(Entity::Stiffness(c.leaf));
+            }
         }
     }
     for f in &after.machining_features {

@@ -6,8 +6,11 @@
 use eframe::egui::Vec2;
 use egui_kittest::kittest::Queryable as _;
 use egui_kittest::{Harness, SnapshotOptions};
-use thinplan_gui::{relations, Entity, ThinplanApp};
-use thinplan_plan::{ConstraintKind, Stage, StiffnessKind};
+use thinplan_gui::{conditions, relations, Entity, ThinplanApp};
+use thinplan_plan::{
+    ConnectionKind, ConstraintKind, ProvenanceSource, Region3, Stage, StiffnessFeatureId,
+    StiffnessKind,
+};
 
 fn harness(source: &str) -> Harness<'static, ThinplanApp> {
     let source = source.to_string();
@@ -581,4 +584,247 @@ fn a_part_opens_through_the_file_picker() {
         h.state().state.message
     );
     assert_eq!(plan.part.format, thinplan_plan::PartFormat::Step);
+}
+
+fn connected(plan: &thinplan_plan::Plan, a: StiffnessFeatureId, b: StiffnessFeatureId) -> bool {
+    plan.connections
+        .iter()
+        .any(|c| (c.base, c.leaf) == (a, b) || (c.base, c.leaf) == (b, a))
+}
+
+#[test]
+fn connections_are_added_and_removed_in_the_inspector_undoably() {
+    let mut h = harness("builtin:wing_rib");
+    run_all(&mut h);
+    let plan = h.state().state.plan().unwrap().clone();
+    let before = plan_bytes(&h);
+    let ids: Vec<StiffnessFeatureId> = plan.stiffness_features.iter().map(|f| f.id).collect();
+    let (a, b) = ids
+        .iter()
+        .flat_map(|&a| ids.iter().map(move |&b| (a, b)))
+        .find(|&(a, b)| a < b && !connected(&plan, a, b))
+        .expect("wing_rib has two features not connected");
+
+    // Connect a and b as crossing through the inspector.
+    h.state_mut().state.select(Some(Entity::Stiffness(a)));
+    h.run_steps(2);
+    // The section is closed until opened (it stays open for other features).
+    assert!(h.query_by_label("crosses").is_none());
+    h.get_by_label_contains(&format!("Connections of {a} ("))
+        .scroll_to_me();
+    h.run();
+    h.get_by_label_contains(&format!("Connections of {a} ("))
+        .click();
+    // Until the header's opening animation has settled.
+    h.run();
+    h.state_mut().set_connect_to(b);
+    h.get_by_label("crosses").scroll_to_me();
+    h.run();
+    h.get_by_label("crosses").click();
+    h.run_steps(1);
+    h.get_by_label("Add connection").click();
+    h.run_steps(2);
+    let edited_plan = h.state().state.plan().unwrap().clone();
+    assert_eq!(
+        edited_plan.connections.len(),
+        plan.connections.len() + 1,
+        "{}",
+        h.state().state.message
+    );
+    let c = edited_plan.connections.last().unwrap();
+    assert_eq!((c.base, c.leaf, c.kind), (a, b, ConnectionKind::Crossing));
+    assert_eq!(c.provenance.source, ProvenanceSource::User);
+    // Only the stages downstream of the connection graph are invalidated.
+    assert!(edited_plan.stages_done.contains(&Stage::Recognise));
+    assert!(!edited_plan.stages_done.contains(&Stage::Sequence));
+    assert_eq!(edited_plan.stiffness_features, plan.stiffness_features);
+    assert!(edited_plan.stiffness_constraints.is_empty());
+    // What changed is shown: both ends of the connection.
+    let changed = h.state().state.changed.clone();
+    assert!(changed.contains(&Entity::Stiffness(a)) && changed.contains(&Entity::Stiffness(b)));
+    let edited = plan_bytes(&h);
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == before, "undo restores the plan exactly");
+    h.get_by_label("Redo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == edited, "redo re-applies the connection");
+
+    // The same pair the other way round is a duplicate: refused, shown,
+    // nothing changed.
+    h.state_mut().state.select(Some(Entity::Stiffness(b)));
+    h.run_steps(2);
+    h.state_mut().set_connect_to(a);
+    h.get_by_label("carries").scroll_to_me();
+    h.run();
+    h.get_by_label("carries").click();
+    h.run_steps(1);
+    h.get_by_label("Add connection").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == edited, "a duplicate changes nothing");
+    assert!(h.query_all_by_label_contains("already connected").count() >= 1);
+    // A feature connected to itself and unknown features are refused.
+    let st = &mut h.state_mut().state;
+    assert!(!st.add_connection(a, a, ConnectionKind::BaseLeaf));
+    assert!(st.refusal.clone().unwrap().contains("itself"));
+    assert!(!st.add_connection(a, StiffnessFeatureId(999_999), ConnectionKind::BaseLeaf));
+    assert!(st
+        .refusal
+        .clone()
+        .unwrap()
+        .contains("no stiffness feature SF999999"));
+    assert!(!st.remove_connection(StiffnessFeatureId(999_999), a));
+    assert!(plan_bytes(&h) == edited, "refusals change nothing");
+
+    // Disconnect through the inspector; undo brings the connection back.
+    h.state_mut().state.select(Some(Entity::Stiffness(a)));
+    h.run_steps(2);
+    h.get_by_label(&format!("disconnect {b}")).scroll_to_me();
+    h.run();
+    h.get_by_label(&format!("disconnect {b}")).click();
+    h.run_steps(2);
+    let removed = h.state().state.plan().unwrap().clone();
+    assert!(!connected(&removed, a, b), "{}", h.state().state.message);
+    assert_eq!(removed.connections, plan.connections);
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == edited);
+
+    // The invalidated stages run again with the new connection kept.
+    run_all(&mut h);
+    let rerun = h.state().state.plan().unwrap().clone();
+    assert!(
+        rerun.stages_done.contains(&Stage::Order),
+        "{}",
+        h.state().state.message
+    );
+    assert!(connected(&rerun, a, b));
+}
+
+#[test]
+fn operation_conditions_are_edited_in_the_inspector_checked_and_undoable() {
+    let mut h = harness("builtin:tall_rib");
+    run_all(&mut h);
+    let plan = h.state().state.plan().unwrap().clone();
+    assert!(plan.stages_done.contains(&Stage::Order));
+    let k = h.state().state.knowledge().unwrap().clone();
+    // The time the inspector recomputes agrees with stage 7's own.
+    for o in &plan.operations {
+        let l = conditions::limits(&plan, &k, o).unwrap();
+        let t = conditions::time_s(o, &l.motion);
+        let t7 = o.provenance.values["time_s"];
+        assert!(
+            (t - t7).abs() <= 0.03 * t7,
+            "{}: {t} s vs stage 7 {t7} s",
+            o.id
+        );
+    }
+    let op = plan
+        .operations
+        .iter()
+        .find(|o| {
+            conditions::feeds(o)
+                .iter()
+                .any(|(r, lo, hi)| *r == Region3::Boundary && lo == hi)
+        })
+        .expect("an operation with boundary moves")
+        .clone();
+    let old = conditions::feeds(&op)
+        .into_iter()
+        .find(|(r, _, _)| *r == Region3::Boundary)
+        .unwrap()
+        .1;
+    let before = plan_bytes(&h);
+    h.state_mut().state.select(Some(Entity::Operation(op.id)));
+    h.run_steps(2);
+    assert!(h
+        .query_by_label_contains("cannot rebuild one operation")
+        .is_some());
+
+    // Halve the boundary feed through the inspector.
+    let new = (old * 0.5).round();
+    h.state_mut().set_feed_field(Region3::Boundary, new);
+    h.get_by_label("Set boundary feed").scroll_to_me();
+    h.run();
+    h.get_by_label("Set boundary feed").click();
+    h.run_steps(2);
+    let edited_plan = h.state().state.plan().unwrap().clone();
+    let e = edited_plan
+        .operations
+        .iter()
+        .find(|o| o.id == op.id)
+        .unwrap();
+    assert_eq!(e.moves.len(), op.moves.len());
+    for (m, m0) in e.moves.iter().zip(&op.moves) {
+        let want = if m0.region == Region3::Boundary {
+            new
+        } else {
+            m0.feed
+        };
+        assert_eq!(m.feed, want, "{}", h.state().state.message);
+        assert_eq!((m.to, m.arc, m.region), (m0.to, m0.arc, m0.region));
+    }
+    assert!(e.provenance.values["time_s"] > op.provenance.values["time_s"]);
+    assert_eq!(
+        e.provenance.values["layers"],
+        op.provenance.values["layers"]
+    );
+    assert_eq!(e.provenance.source, ProvenanceSource::User);
+    // Nothing upstream of the program is invalidated: the order stays.
+    assert_eq!(edited_plan.stages_done, plan.stages_done);
+    assert_eq!(edited_plan.operation_order, plan.operation_order);
+    for (o, o0) in edited_plan.operations.iter().zip(&plan.operations) {
+        assert!(o.id == op.id || o == o0, "{} changed too", o.id);
+    }
+    assert!(h.state().state.changed.contains(&Entity::Operation(op.id)));
+    let edited = plan_bytes(&h);
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == before, "undo restores the plan exactly");
+    h.get_by_label("Redo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == edited, "redo re-applies the feed");
+
+    // Invalid values are refused with a message and change nothing.
+    h.state_mut().set_feed_field(Region3::Boundary, 0.0);
+    h.get_by_label("Set boundary feed").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == edited);
+    assert!(
+        h.query_all_by_label_contains("must be a positive number")
+            .count()
+            >= 1
+    );
+    let machine = k.machine(&plan.setup.machine).unwrap().clone();
+    let st = &mut h.state_mut().state;
+    assert!(!st.set_feed(op.id, Region3::Boundary, f64::NAN));
+    assert!(!st.set_feed(op.id, Region3::Boundary, machine.x.v_max * 60.0 * 10.0));
+    assert!(
+        st.message.contains("faster than any axis"),
+        "{}",
+        st.message
+    );
+    assert!(!st.set_spindle(op.id, machine.spindle_max_rpm + 1.0));
+    assert!(st.message.contains("above machine"), "{}", st.message);
+    assert!(!st.set_spindle(op.id, f64::INFINITY));
+    assert!(!st.set_feed(
+        thinplan_plan::OperationId(999_999),
+        Region3::Boundary,
+        100.0
+    ));
+    assert!(plan_bytes(&h) == edited, "refusals change nothing");
+
+    // The spindle through the inspector: the moves stay as they are.
+    let rpm = (op.spindle_rpm * 0.9).round();
+    h.state_mut().set_spindle_field(rpm);
+    h.get_by_label("Set spindle").click();
+    h.run_steps(2);
+    let spun = h.state().state.plan().unwrap().clone();
+    let s = spun.operations.iter().find(|o| o.id == op.id).unwrap();
+    assert_eq!(s.spindle_rpm, rpm, "{}", h.state().state.message);
+    assert_eq!(s.moves, e.moves);
+    assert_eq!(spun.stages_done, plan.stages_done);
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert!(plan_bytes(&h) == edited);
 }
