@@ -715,10 +715,19 @@ impl ThinplanApp {
                             row("method", o.method.clone());
                             row("tool", o.tool.clone());
                             row("spindle rpm", format!("{:.0}", o.spindle_rpm));
-                            let flutes = state
+                            let limits = state
                                 .knowledge()
-                                .and_then(|k| conditions::limits(plan, k, o).ok())
-                                .and_then(|l| l.flutes);
+                                .and_then(|k| conditions::limits(plan, k, o).ok());
+                            let flutes = limits.as_ref().and_then(|l| l.flutes);
+                            let cutting = limits.as_ref().and_then(|l| l.cutting.clone());
+                            if let Some(d) = limits.as_ref().and_then(|l| l.tool_diameter) {
+                                let mut v =
+                                    format!("{:.0}", conditions::cutting_speed(d, o.spindle_rpm));
+                                if let Some(c) = &cutting {
+                                    v.push_str(&format!("  (material: {:.0})", c.cutting_speed));
+                                }
+                                row("cutting speed m/min", v);
+                            }
                             for (r, lo, hi) in conditions::feeds(o) {
                                 let mut v = if lo == hi {
                                     format!("{lo:.0}")
@@ -734,6 +743,15 @@ impl ThinplanApp {
                                     v.push_str(&format!("  ({fz:.4} mm/tooth)"));
                                 }
                                 row(&format!("{} feed mm/min", conditions::region_name(r)), v);
+                            }
+                            if let Some(c) = &cutting {
+                                row(
+                                    "material feed per tooth mm",
+                                    format!(
+                                        "roughing {:.4}, finishing {:.4}",
+                                        c.feed_per_tooth_roughing, c.feed_per_tooth_finishing
+                                    ),
+                                );
                             }
                             let pv = |k: &str| o.provenance.values.get(k).copied();
                             for (k, name) in [

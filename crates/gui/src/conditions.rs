@@ -40,6 +40,11 @@ pub struct Limits {
     pub feed_max_mm_min: f64,
     /// The tool's flutes, for the feed per tooth (`None`: tool unknown).
     pub flutes: Option<u32>,
+    /// The tool's diameter, mm, for the cutting speed.
+    pub tool_diameter: Option<f64>,
+    /// The material's recommended cutting data (shown beside the values,
+    /// a recommendation rather than a limit).
+    pub cutting: Option<thinplan_knowledge::CuttingData>,
     pub motion: MachineLimits,
 }
 
@@ -51,16 +56,17 @@ pub fn limits(plan: &Plan, k: &Knowledge, op: &Operation) -> Result<Limits, Stri
             plan.setup.machine, k.origin
         )
     })?;
-    let flutes = k
+    let tool = k
         .tool_set(&plan.setup.tool_set)
-        .and_then(|s| s.tools.iter().find(|t| t.id == op.tool))
-        .map(|t| t.flutes);
+        .and_then(|s| s.tools.iter().find(|t| t.id == op.tool));
     let v_max = [m.x.v_max, m.y.v_max, m.z.v_max];
     Ok(Limits {
         machine: m.id.clone(),
         spindle_max_rpm: m.spindle_max_rpm,
         feed_max_mm_min: v_max.iter().copied().fold(0.0, f64::max) * 60.0,
-        flutes,
+        flutes: tool.map(|t| t.flutes),
+        tool_diameter: tool.map(|t| t.diameter),
+        cutting: k.material(&plan.setup.material).map(|m| m.cutting.clone()),
         motion: MachineLimits {
             v_max,
             a_max: [m.x.a_max, m.y.a_max, m.z.a_max],
@@ -86,6 +92,11 @@ pub fn feeds(op: &Operation) -> Vec<(Region3, f64, f64)> {
 /// Feed per tooth (mm) at `feed` mm/min.
 pub fn feed_per_tooth(feed: f64, rpm: f64, flutes: u32) -> f64 {
     feed / (rpm * flutes.max(1) as f64)
+}
+
+/// Cutting speed (m/min) of a tool of `diameter` mm at `rpm`.
+pub fn cutting_speed(diameter: f64, rpm: f64) -> f64 {
+    std::f64::consts::PI * diameter * rpm / 1000.0
 }
 
 /// Sets the spindle speed; refused outside (0, the machine's maximum].

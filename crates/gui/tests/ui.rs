@@ -740,6 +740,8 @@ fn operation_conditions_are_edited_in_the_inspector_checked_and_undoable() {
     assert!(h
         .query_by_label_contains("cannot rebuild one operation")
         .is_some());
+    assert!(h.query_by_label("cutting speed m/min").is_some());
+    assert!(h.query_by_label("boundary feed mm/min").is_some());
 
     // Halve the boundary feed through the inspector.
     let new = (old * 0.5).round();
@@ -777,6 +779,15 @@ fn operation_conditions_are_edited_in_the_inspector_checked_and_undoable() {
         assert!(o.id == op.id || o == o0, "{} changed too", o.id);
     }
     assert!(h.state().state.changed.contains(&Entity::Operation(op.id)));
+    // The program carries the new feed (the post writes whole mm/min).
+    let post = k.post("linuxcnc").unwrap();
+    let tools = k.tool_set(&plan.setup.tool_set).unwrap();
+    let word = format!("F{new:.0}");
+    let count = |p: &thinplan_plan::Plan| {
+        let text = thinplan_post::post(p, post, tools).unwrap().text;
+        text.split_whitespace().filter(|w| *w == word).count()
+    };
+    assert!(count(&edited_plan) > count(&plan), "{word}");
     let edited = plan_bytes(&h);
     h.get_by_label("Undo").click();
     h.run_steps(2);
