@@ -56,6 +56,9 @@ struct Forms {
     connect_as: ConnectAs,
     /// The feed (mm/min) of each kind of move of the selected operation.
     feeds: Vec<(Region3, f64)>,
+    /// Its lowest and highest feed per kind, found once per plan change
+    /// (an operation may have a million moves; not walked every frame).
+    feed_ranges: Vec<(Region3, f64, f64)>,
 }
 
 /// How the selected stiffness feature stands to the one it is connected to.
@@ -624,9 +627,12 @@ impl ThinplanApp {
             Entity::Operation(id) => {
                 if let Some(o) = plan.operations.iter().find(|o| o.id == id) {
                     self.forms.spindle = o.spindle_rpm;
-                    self.forms.feeds = conditions::feeds(o)
-                        .into_iter()
-                        .map(|(r, lo, _)| (r, lo))
+                    self.forms.feed_ranges = conditions::feeds(o);
+                    self.forms.feeds = self
+                        .forms
+                        .feed_ranges
+                        .iter()
+                        .map(|&(r, lo, _)| (r, lo))
                         .collect();
                 }
             }
@@ -728,7 +734,7 @@ impl ThinplanApp {
                                 }
                                 row("cutting speed m/min", v);
                             }
-                            for (r, lo, hi) in conditions::feeds(o) {
+                            for &(r, lo, hi) in &forms.feed_ranges {
                                 let mut v = if lo == hi {
                                     format!("{lo:.0}")
                                 } else {

@@ -741,7 +741,8 @@ fn operation_conditions_are_edited_in_the_inspector_checked_and_undoable() {
         .query_by_label_contains("cannot rebuild one operation")
         .is_some());
     assert!(h.query_by_label("cutting speed m/min").is_some());
-    assert!(h.query_by_label("boundary feed mm/min").is_some());
+    // In the attribute table and beside its edit field.
+    assert_eq!(h.query_all_by_label("boundary feed mm/min").count(), 2);
 
     // Halve the boundary feed through the inspector.
     let new = (old * 0.5).round();
