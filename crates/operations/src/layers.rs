@@ -1258,6 +1258,7 @@ pub(crate) fn feature_operations(
             z_prev,
             z,
             a_b,
+            angle,
         );
         z_prev = z;
         layer_count += 1;
@@ -1356,6 +1357,7 @@ pub(crate) fn feature_operations(
             top,
             z_min,
             a_b,
+            angle,
         );
         if !b.moves.is_empty() {
             retract(&mut b, safe_z);
@@ -1555,6 +1557,7 @@ fn boundary_level(
     z_prev: f64,
     z: f64,
     a_b: f64,
+    angle: f64,
 ) {
     if passes.is_empty() {
         return;
@@ -1577,7 +1580,30 @@ fn boundary_level(
                 b.line(p.start.extend(b.pos.z), Kind::Link);
                 b.line(p.start.extend(zj), Kind::Link);
             } else {
-                go_to(b, started, space, p.start, zj);
+                // Down to the height cleared so far, then ramp along the
+                // pass itself (its centre keeps r from the product) rather
+                // than plunging; a pass that starts beyond an open edge
+                // starts in air.
+                let z_hi = if j == 1 {
+                    z_prev
+                } else {
+                    z_prev - (z_prev - z) * (j - 1) as f64 / m as f64
+                };
+                go_to(b, started, space, p.start, z_hi);
+                if z_hi > zj + 1e-12 {
+                    // The straight stretch the pass starts with (a chord of
+                    // one of its arcs would come closer than r); an entry,
+                    // so its legs back are roughing, not boundary, moves.
+                    let mut prefix = vec![p.start];
+                    for sg in p.segs.iter().take_while(|sg| sg.arc.is_none()) {
+                        prefix.push(sg.to);
+                    }
+                    let ramped = p.lead_in != "from-open-side"
+                        && ramp(b, &prefix, z_hi, zj, angle, STEP, Kind::Rest).is_some();
+                    if !ramped {
+                        b.line(p.start.extend(zj), Kind::Link);
+                    }
+                }
             }
             b.follow(&p.segs, zj, Kind::Boundary);
         }
