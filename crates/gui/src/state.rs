@@ -872,24 +872,7 @@ impl AppState {
             return Err("the plan has no ordered operations yet: run all stages first".into());
         }
         let k = &s.knowledge;
-        let post = k.post(post_id).ok_or_else(|| {
-            let known: Vec<&str> = k.posts.keys().map(String::as_str).collect();
-            format!(
-                "unknown post `{post_id}` in knowledge {} (known: {})",
-                k.origin,
-                known.join(", ")
-            )
-        })?;
-        let tools = k.tool_set(&plan.setup.tool_set).ok_or_else(|| {
-            format!(
-                "the plan's tool set `{}` is not in knowledge {}",
-                plan.setup.tool_set, k.origin
-            )
-        })?;
-        let program = thinplan_post::post(plan, post, tools)
-            .map_err(|e| format!("cannot post with `{post_id}`: {e}"))?;
-        thinplan_plan::io::write_atomic(gcode, program.text.as_bytes())
-            .map_err(|e| format!("{}: cannot write the program: {e}", gcode.display()))?;
+        let program = thinplan_pipeline::output::write_program(plan, k, post_id, gcode, None)?;
         let mut m = format!(
             "wrote {} ({} lines, {} tool changes)",
             gcode.display(),
