@@ -85,25 +85,6 @@ impl ToolShape {
         }
     }
 
-    /// d/dρ of [`ToolShape::height_at`] inside the tool (∞ at the rim of a
-    /// rounded tool).
-    #[inline]
-    pub(crate) fn slope_at(&self, rho: f64) -> f64 {
-        let core = self.radius() - self.corner_radius;
-        if rho <= core {
-            0.0
-        } else {
-            let u = rho - core;
-            let rc = self.corner_radius;
-            let w = rc * rc - u * u;
-            if w <= 0.0 {
-                f64::INFINITY
-            } else {
-                u / w.sqrt()
-            }
-        }
-    }
-
     fn validate(&self) -> Result<(), String> {
         if !(self.diameter.is_finite() && self.diameter > 0.0 && self.diameter < 1e4) {
             return Err(format!("tool diameter {} must be positive", self.diameter));
