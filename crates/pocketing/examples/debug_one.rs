@@ -16,6 +16,7 @@ fn main() {
         println!("tool {} step {} | offset len {:.1} rings {} gap {:.3} | curv len {:.1} contours {} gap {:.3} {:?} {:?}",
             params.tool_diameter, params.stepover, off.length(), off.contours.len(), off.max_gap,
             cur.length(), cur.contours.len(), cur.max_gap, cur.method, cur.fallback_reason);
+        println!("choice: {:?}", cur.choice);
         if let Some(c) = cur.center {
             for (k, ct) in cur.contours.iter().enumerate() {
                 let rmin = ct

@@ -195,6 +195,10 @@ impl PocketParams {
 pub enum Method {
     Offset,
     Curvilinear,
+    /// A spiral through the contours of the distance to the roughing boundary (parallel
+    /// offsets), wound about the distance's ridge: the curvilinear construction with the
+    /// offsets' even spacing, for elongated pockets (a slot).
+    OffsetSpiral,
     OffsetFallback,
 }
 
@@ -203,6 +207,7 @@ impl Method {
         match self {
             Method::Offset => "offset",
             Method::Curvilinear => "curvilinear",
+            Method::OffsetSpiral => "offset-spiral",
             Method::OffsetFallback => "offset-fallback",
         }
     }
@@ -225,6 +230,9 @@ pub struct PocketPath {
     pub center: Option<DVec2>,
     /// Why the curvilinear method fell back to offsets.
     pub fallback_reason: Option<String>,
+    /// Which spiral was kept and why (curvilinear vs offset spiral: the shorter), for
+    /// provenance.
+    pub choice: Option<String>,
     /// The tool-offset boundary ∂Ω (finishing pass loop).
     pub boundary: Vec<DVec2>,
 }

@@ -246,6 +246,7 @@ fn offset_path_styled(
         contours: levels.iter().flatten().cloned().collect(),
         center: None,
         fallback_reason: None,
+        choice: None,
         boundary: levels[0].first().cloned().unwrap_or_default(),
     })
 }

@@ -9,18 +9,102 @@ use crate::geom::{loop_gap, perimeter, signed_area, SegIndex};
 use crate::offset::{append_loop_from_nearest, offset_loops, offset_path, sample_level};
 use crate::{Method, Pocket, PocketError, PocketParams, PocketPath};
 
-/// A closed loop, star-shaped about `c`, as a function of the winding angle.
+/// The core the orbits wind about: a point (Bieterman's centre, `len` = 0) or a segment (the
+/// ridge of an elongated pocket). Rays leave the core as the normals of a thin stadium around
+/// it, so the "winding angle" generalises to a parameter τ ∈ [0, T), T = 2·len + 2π: along the
+/// right side a → b, round the cap at b, back along the left side, round the cap at a
+/// (counter-clockwise). With `len` = 0, τ is the polar angle measured from −perp(u).
+#[derive(Clone, Copy)]
+struct Core {
+    a: DVec2,
+    u: DVec2,
+    len: f64,
+}
+
+impl Core {
+    fn point(c: DVec2) -> Core {
+        Core {
+            a: c,
+            u: DVec2::X,
+            len: 0.0,
+        }
+    }
+
+    fn period(&self) -> f64 {
+        2.0 * self.len + TAU
+    }
+
+    fn mid(&self) -> DVec2 {
+        self.a + 0.5 * self.len * self.u
+    }
+
+    /// Sample points of the core (for gap measurements).
+    fn samples(&self, step: f64) -> Vec<DVec2> {
+        let k = (self.len / step.max(1e-12)).ceil() as usize;
+        (0..=k)
+            .map(|j| self.a + self.u * (self.len * j as f64 / k.max(1) as f64))
+            .collect()
+    }
+
+    /// τ of a point off the core; `None` on the core.
+    fn tau(&self, p: DVec2) -> Option<f64> {
+        let perp = self.u.perp();
+        let s = (p - self.a).dot(self.u);
+        let q = self.a + self.u * s.clamp(0.0, self.len);
+        let v = p - q;
+        if v.length_squared() < 1e-24 {
+            return None;
+        }
+        let (l, pi) = (self.len, std::f64::consts::PI);
+        Some(if s > 0.0 && s < l {
+            if v.dot(perp) < 0.0 {
+                s
+            } else {
+                l + pi + (l - s)
+            }
+        } else if s >= l && l > 0.0 {
+            // in a cap |v·u| is the axial component; abs() also makes −0.0 (read by atan2 as
+            // −π) +0.0
+            l + v.dot(self.u).abs().atan2(-v.dot(perp))
+        } else if l > 0.0 {
+            2.0 * l + pi + v.dot(self.u).abs().atan2(v.dot(perp))
+        } else {
+            // a point core: the polar angle from −perp
+            v.dot(self.u).atan2(-v.dot(perp)).rem_euclid(TAU)
+        })
+    }
+
+    /// Origin and unit direction of the ray at τ.
+    fn ray(&self, tau: f64) -> (DVec2, DVec2) {
+        let (l, pi) = (self.len, std::f64::consts::PI);
+        let t = tau.rem_euclid(self.period());
+        let perp = self.u.perp();
+        if t < l {
+            (self.a + self.u * t, -perp)
+        } else if t < l + pi {
+            let ph = t - l;
+            (self.a + self.u * l, -perp * ph.cos() + self.u * ph.sin())
+        } else if t < 2.0 * l + pi {
+            (self.a + self.u * (2.0 * l + pi - t), perp)
+        } else {
+            let ph = t - 2.0 * l - pi;
+            (self.a, perp * ph.cos() - self.u * ph.sin())
+        }
+    }
+}
+
+/// A closed loop, star-shaped about the core, as a function of τ (see [`Core`]).
 struct Polar {
-    c: DVec2,
-    /// angles relative to θ0, strictly increasing, in [0, 2π)
+    core: Core,
+    /// τ relative to τ0, strictly increasing, in [0, T)
     ang: Vec<f64>,
     pts: Vec<DVec2>,
 }
 
 impl Polar {
-    /// `None` if the loop is not star-shaped about `c` (winding angle not strictly monotone or
-    /// winding number ≠ 1).
-    fn new(lp: &[DVec2], c: DVec2, theta0: f64) -> Option<Polar> {
+    /// `None` if the loop is not star-shaped about the core (τ not strictly monotone along it
+    /// or winding ≠ 1).
+    fn new(lp: &[DVec2], core: Core, tau0: f64) -> Option<Polar> {
         let mut lp: Vec<DVec2> = lp.to_vec();
         if signed_area(&lp) < 0.0 {
             lp.reverse();
@@ -29,53 +113,49 @@ impl Polar {
         if n < 3 {
             return None;
         }
+        let per = core.period();
+        let taus: Vec<f64> = lp.iter().map(|&p| core.tau(p)).collect::<Option<_>>()?;
         let mut total = 0.0;
         for i in 0..n {
-            let a = lp[i] - c;
-            let b = lp[(i + 1) % n] - c;
-            if a.length_squared() < 1e-24 || b.length_squared() < 1e-24 {
-                return None;
-            }
-            let d = a.perp_dot(b).atan2(a.dot(b));
+            let d = (taus[(i + 1) % n] - taus[i] + 0.5 * per).rem_euclid(per) - 0.5 * per;
             if d <= 1e-12 {
                 return None;
             }
             total += d;
         }
-        if (total - TAU).abs() > 1e-6 {
+        if (total - per).abs() > 1e-6 {
             return None;
         }
-        let rel = |p: DVec2| ((p - c).to_angle() - theta0).rem_euclid(TAU);
+        let rel = |t: f64| (t - tau0).rem_euclid(per);
         let start = (0..n)
-            .min_by(|&i, &j| rel(lp[i]).total_cmp(&rel(lp[j])))
+            .min_by(|&i, &j| rel(taus[i]).total_cmp(&rel(taus[j])))
             .unwrap();
         let pts: Vec<DVec2> = (0..n).map(|k| lp[(start + k) % n]).collect();
         let mut ang = Vec::with_capacity(n);
-        let mut acc = rel(pts[0]);
+        let mut acc = rel(taus[start]);
         ang.push(acc);
         for k in 1..n {
-            let a = pts[k - 1] - c;
-            let b = pts[k] - c;
-            acc += a.perp_dot(b).atan2(a.dot(b));
+            let (t0, t1) = (taus[(start + k - 1) % n], taus[(start + k) % n]);
+            acc += (t1 - t0 + 0.5 * per).rem_euclid(per) - 0.5 * per;
             ang.push(acc);
         }
-        Some(Polar { c, ang, pts })
+        Some(Polar { core, ang, pts })
     }
 
-    /// Radius along the ray at relative angle `t` ∈ [0, 2π] (θ0 + t absolute).
-    fn radius(&self, t: f64, theta0: f64) -> f64 {
+    /// Distance along the ray at relative parameter `t` ∈ [0, T] (τ0 + t absolute).
+    fn radius(&self, t: f64, tau0: f64) -> f64 {
         let n = self.pts.len();
-        let t = t.rem_euclid(TAU);
-        // segment i: from pts[i] (ang[i]) to pts[i+1] (ang[i+1]), cyclic with +2π
+        let t = t.rem_euclid(self.core.period());
+        // segment i: from pts[i] (ang[i]) to pts[i+1] (ang[i+1]), cyclic with +T
         let i = match self.ang.partition_point(|&a| a <= t) {
             0 => n - 1,
             k => k - 1,
         };
         let (a, b) = (self.pts[i], self.pts[(i + 1) % n]);
-        let dir = DVec2::from_angle(theta0 + t);
-        // c + r dir = a + s (b - a)
+        let (o, dir) = self.core.ray(tau0 + t);
+        // o + r dir = a + s (b - a)
         let ab = b - a;
-        let ca = a - self.c;
+        let ca = a - o;
         let den = dir.perp_dot(ab);
         if den.abs() < 1e-300 {
             return ca.length();
@@ -84,11 +164,9 @@ impl Polar {
         r.max(0.0)
     }
 
-    fn max_radius(&self) -> f64 {
-        self.pts
-            .iter()
-            .map(|p| p.distance(self.c))
-            .fold(0.0, f64::max)
+    /// Length of the loop (sets the sampling density of the orbit ending on it).
+    fn perimeter(&self) -> f64 {
+        perimeter(&self.pts)
     }
 }
 
@@ -142,11 +220,132 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
         blend_with_distance(&mesh, &mut sol, &rough_loop, params.distance_blend);
     }
     let topo = EdgeTopology::new(&mesh);
+    let imax = (0..sol.u.len())
+        .max_by(|&a, &b| sol.u[a].total_cmp(&sol.u[b]))
+        .unwrap();
+    let pde = spiral_with(
+        params,
+        &mesh,
+        &topo,
+        &sol,
+        Core::point(mesh.vertices[imax]),
+        Method::Curvilinear,
+        &rough_loop,
+        &boundary,
+    );
+    // the offset spiral: contours of the distance to ∂Ω' (parallel offsets, evenly spaced
+    // where the PDE's crowd) wound about the distance's ridge, a segment in an elongated pocket
+    let mut dist = sol.clone();
+    blend_with_distance(&mesh, &mut dist, &rough_loop, 1.0);
+    let dmax = {
+        let idx = SegIndex::new(&[&rough_loop], true);
+        mesh.vertices
+            .iter()
+            .map(|p| idx.nearest(*p))
+            .fold(0.0, f64::max)
+    };
+    let ridge = ridge_core(&mesh, &dist.u, dmax, h);
+    let off = spiral_with(
+        params,
+        &mesh,
+        &topo,
+        &dist,
+        ridge,
+        Method::OffsetSpiral,
+        &rough_loop,
+        &boundary,
+    );
+    match (pde, off) {
+        (Ok(a), Ok(b)) => {
+            // the shorter path: at high L/D time follows length; recorded as the choice
+            let (la, lb) = (a.length(), b.length());
+            let (mut win, other) = if lb < la {
+                (b, "curvilinear")
+            } else {
+                (a, "offset-spiral")
+            };
+            win.choice = Some(format!(
+                "{} {:.1} mm shorter than {other} {:.1} mm",
+                win.method.as_str(),
+                la.min(lb),
+                la.max(lb)
+            ));
+            Ok(win)
+        }
+        (Ok(mut a), Err(rb)) | (Err(rb), Ok(mut a)) => {
+            a.choice = Some(format!("the other field failed: {rb}"));
+            Ok(a)
+        }
+        (Err(ra), Err(rb)) => fallback(format!("{ra}; offset spiral: {rb}")),
+    }
+}
+
+/// The ridge of a normalised field as the spiral's core: the principal axis of the vertices
+/// within `h`·(gradient scale) of the maximum, shortened by `h` at both ends; a point when that
+/// leaves nothing.
+fn ridge_core(mesh: &Mesh, w: &[f64], dmax: f64, h: f64) -> Core {
+    let imax = (0..w.len()).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap();
+    let c = mesh.vertices[imax];
+    // w = d / max d: a step h in distance is h / max d in w
+    let tol = h / dmax.max(1e-12);
+    let ridge: Vec<DVec2> = mesh
+        .vertices
+        .iter()
+        .zip(w)
+        .filter(|(_, &x)| x >= 1.0 - tol)
+        .map(|(p, _)| *p)
+        .collect();
+    if ridge.len() < 3 {
+        return Core::point(c);
+    }
+    let m = ridge.iter().fold(DVec2::ZERO, |a, p| a + *p) / ridge.len() as f64;
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for p in &ridge {
+        let d = *p - m;
+        sxx += d.x * d.x;
+        sxy += d.x * d.y;
+        syy += d.y * d.y;
+    }
+    let ang = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let u = DVec2::from_angle(ang);
+    let (lo, hi) = ridge
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            let s = (*p - m).dot(u);
+            (lo.min(s), hi.max(s))
+        });
+    // a sharp corner's ridge (slope ≥ ½ away from a 60° incentre) spans up to 4h: not a segment
+    let len = hi - lo - 4.0 * h;
+    if len <= h {
+        return Core::point(c);
+    }
+    Core {
+        a: m + u * (lo + 2.0 * h),
+        u,
+        len,
+    }
+}
+
+/// One spiral about `core` on the field `sol`, retried with a smaller target gap until the
+/// measured gap is ≤ the stepover; `Err(reason)` when the field's contours do not allow one.
+#[allow(clippy::too_many_arguments)]
+fn spiral_with(
+    params: &PocketParams,
+    mesh: &Mesh,
+    topo: &EdgeTopology,
+    sol: &Solution,
+    core: Core,
+    method: Method,
+    rough_loop: &[DVec2],
+    boundary: &[DVec2],
+) -> Result<PocketPath, String> {
     let mut factor = 1.0;
     let mut worst = 0.0;
     for _ in 0..10 {
-        match attempt(params, &mesh, &topo, &sol, &rough_loop, &boundary, factor) {
-            Attempt::Fallback(reason) => return fallback(reason),
+        match attempt(
+            params, mesh, topo, sol, core, method, rough_loop, boundary, factor,
+        ) {
+            Attempt::Fallback(reason) => return Err(reason),
             Attempt::Ok(p) => {
                 if p.max_gap <= params.stepover {
                     return Ok(*p);
@@ -157,7 +356,7 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
         }
     }
     // never return a spiral whose measured gap exceeds the stepover
-    fallback(format!(
+    Err(format!(
         "spiral gap {worst:.4} stays above the stepover {:.4} after 10 attempts",
         params.stepover
     ))
@@ -227,14 +426,14 @@ fn choose_levels(
     topo: &EdgeTopology,
     sol: &Solution,
     rough_loop: &[DVec2],
-    c: DVec2,
+    core: &[DVec2],
     target: f64,
 ) -> Result<Vec<(f64, Vec<DVec2>)>, ()> {
     let mut out: Vec<(f64, Vec<DVec2>)> = Vec::new();
     let mut prev_level = 1.0;
     let interior_gap = |lvl: f64, lp: &[DVec2]| -> f64 {
         let idx = SegIndex::new(&[lp], true);
-        let mut g = idx.nearest(c);
+        let mut g = core.iter().map(|&c| idx.nearest(c)).fold(0.0, f64::max);
         for (p, &u) in mesh.vertices.iter().zip(&sol.u) {
             if u > lvl {
                 g = g.max(idx.nearest(*p));
@@ -290,11 +489,14 @@ fn choose_levels(
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn attempt(
     params: &PocketParams,
     mesh: &Mesh,
     topo: &EdgeTopology,
     sol: &Solution,
+    core: Core,
+    method: Method,
     rough_loop: &[DVec2],
     boundary: &[DVec2],
     factor: f64,
@@ -302,19 +504,19 @@ fn attempt(
     let s = params.stepover;
     let target = factor * s;
     let step = params.sample_step();
-    let imax = (0..sol.u.len())
-        .max_by(|&a, &b| sol.u[a].total_cmp(&sol.u[b]))
-        .unwrap();
-    let c = mesh.vertices[imax];
+    let c = core.mid();
+    let core_pts = core.samples(step);
+    let per = core.period();
     // start the orbits on the ray towards the nearest point of the roughing boundary
     let theta0 = {
+        let idx = SegIndex::new(&[&core_pts], false);
         let p = rough_loop
             .iter()
-            .min_by(|a, b| a.distance_squared(c).total_cmp(&b.distance_squared(c)))
+            .min_by(|a, b| idx.nearest(**a).total_cmp(&idx.nearest(**b)))
             .unwrap();
-        (*p - c).to_angle()
+        core.tau(*p).unwrap_or(0.0)
     };
-    let Some(terminal) = Polar::new(rough_loop, c, theta0) else {
+    let Some(terminal) = Polar::new(rough_loop, core, theta0) else {
         return Attempt::Fallback(
             "tool-offset boundary is not star-shaped about the centre".into(),
         );
@@ -322,7 +524,7 @@ fn attempt(
     // --- levels, outward from the maximum: greedy with the target gap, then the smallest
     // target that needs no more contours (so the gaps come out even instead of leaving a thin
     // last orbit)
-    let Ok(first) = choose_levels(mesh, topo, sol, rough_loop, c, target) else {
+    let Ok(first) = choose_levels(mesh, topo, sol, rough_loop, &core_pts, target) else {
         return Attempt::Fallback("no single contour within the stepover below the maximum".into());
     };
     let n0 = first.len();
@@ -330,7 +532,7 @@ fn attempt(
     let mut chosen = first;
     for _ in 0..6 {
         let mid = 0.5 * (lo + hi);
-        match choose_levels(mesh, topo, sol, rough_loop, c, mid) {
+        match choose_levels(mesh, topo, sol, rough_loop, &core_pts, mid) {
             Ok(l) if l.len() <= n0 => {
                 hi = mid;
                 chosen = l;
@@ -341,7 +543,7 @@ fn attempt(
     let mut contours: Vec<Vec<DVec2>> = Vec::new();
     let mut polars: Vec<Polar> = Vec::new();
     for (lvl, lp) in chosen {
-        let Some(pol) = Polar::new(&lp, c, theta0) else {
+        let Some(pol) = Polar::new(&lp, core, theta0) else {
             return Attempt::Fallback(format!(
                 "contour at level {lvl:.4} is not star-shaped about the centre"
             ));
@@ -354,7 +556,7 @@ fn attempt(
     // start ray and runs it in full instead
     let from_centre = contours
         .first()
-        .is_none_or(|c1| loop_gap(&[c], c1) <= target);
+        .is_none_or(|c1| loop_gap(&core_pts, c1) <= target);
     // --- orbits: centre → C1 → … → Cm → ∂Ω' (roughing boundary)
     let mut radii: Vec<Box<dyn Fn(f64) -> f64 + '_>> = Vec::new();
     if from_centre {
@@ -365,38 +567,39 @@ fn attempt(
     }
     let term = &terminal;
     radii.push(Box::new(move |t| term.radius(t, theta0)));
-    let rmax: Vec<f64> = polars
+    let perims: Vec<f64> = polars
         .iter()
-        .map(|p| p.max_radius())
-        .chain(std::iter::once(terminal.max_radius()))
+        .map(|p| p.perimeter())
+        .chain(std::iter::once(terminal.perimeter()))
         .collect();
+    let at = |r: f64, t: f64| {
+        let (o, dir) = core.ray(theta0 + t);
+        o + r * dir
+    };
     let mut turns: Vec<Vec<DVec2>> = Vec::new();
     if !from_centre {
         // straight entry along the start ray, then the first contour in full
         let p = &polars[0];
-        let n = ((TAU * p.max_radius() / step).ceil() as usize).max(24);
-        let mut t0 = vec![c];
-        let first = sample_turn(
-            |t| c + p.radius(TAU * t, theta0) * DVec2::from_angle(theta0 + TAU * t),
-            n,
-            step,
-        );
+        let n = ((p.perimeter() / step).ceil() as usize).max(24);
+        let c0 = at(0.0, 0.0);
+        let mut t0 = vec![c0];
+        let first = sample_turn(|t| at(p.radius(per * t, theta0), per * t), n, step);
         // straight entry from the centre, subdivided
-        let k = (c.distance(first[0]) / step).ceil().max(1.0) as usize;
+        let k = (c0.distance(first[0]) / step).ceil().max(1.0) as usize;
         for j in 1..k {
-            t0.push(c.lerp(first[0], j as f64 / k as f64));
+            t0.push(c0.lerp(first[0], j as f64 / k as f64));
         }
         t0.extend(first);
         turns.push(t0);
     }
     let roff = usize::from(from_centre);
     for k in 0..radii.len() - 1 {
-        let n = ((TAU * rmax[k + 1 - roff] / step).ceil() as usize).max(24);
+        let n = ((perims[k + 1 - roff] / step).ceil() as usize).max(24);
         let (ra, rb) = (&radii[k], &radii[k + 1]);
         let turn = sample_turn(
             |t| {
-                let th = TAU * t;
-                c + ((1.0 - t) * ra(th) + t * rb(th)) * DVec2::from_angle(theta0 + th)
+                let th = per * t;
+                at((1.0 - t) * ra(th) + t * rb(th), th)
             },
             n,
             step,
@@ -477,13 +680,80 @@ fn attempt(
     append_loop_from_nearest(&mut points, boundary);
     contours.push(rough_loop.to_vec());
     Attempt::Ok(Box::new(PocketPath {
-        method: Method::Curvilinear,
+        method,
         points,
         finish_start,
         max_gap,
         contours,
         center: Some(c),
         fallback_reason: None,
+        choice: None,
         boundary: boundary.to_vec(),
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    /// τ and the ray agree: every point off the core lies on the ray at its own τ, for a point
+    /// core and a segment core, on both sides and round both caps.
+    #[test]
+    fn core_tau_and_ray_agree() {
+        let cores = [
+            Core::point(DVec2::new(1.0, 2.0)),
+            Core {
+                a: DVec2::new(-3.0, 1.0),
+                u: DVec2::from_angle(0.3),
+                len: 6.0,
+            },
+        ];
+        for core in cores {
+            for i in 0..40 {
+                for j in 1..6 {
+                    let p =
+                        core.mid() + DVec2::from_angle(i as f64 * 0.157 + 0.01) * (j as f64 * 1.7);
+                    let Some(t) = core.tau(p) else { continue };
+                    assert!((0.0..core.period() + 1e-12).contains(&t));
+                    let (o, dir) = core.ray(t);
+                    let v = p - o;
+                    assert!(v.perp_dot(dir).abs() < 1e-9, "{p} off the ray at τ {t}");
+                    assert!(v.dot(dir) > 0.0);
+                }
+            }
+        }
+    }
+
+    /// A stadium around a segment core is star-shaped about it, its radius is its half-width.
+    #[test]
+    fn stadium_is_star_shaped_about_its_segment() {
+        let core = Core {
+            a: DVec2::new(0.0, 0.0),
+            u: DVec2::X,
+            len: 10.0,
+        };
+        let w = 2.0;
+        let mut lp = Vec::new();
+        for k in 0..=20 {
+            lp.push(DVec2::new(k as f64 * 0.5, -w));
+        }
+        for k in 1..20 {
+            lp.push(
+                DVec2::new(10.0, 0.0) + w * DVec2::from_angle(-FRAC_PI_2 + k as f64 * PI / 20.0),
+            );
+        }
+        for k in 0..=20 {
+            lp.push(DVec2::new(10.0 - k as f64 * 0.5, w));
+        }
+        for k in 1..20 {
+            lp.push(w * DVec2::from_angle(FRAC_PI_2 + k as f64 * PI / 20.0));
+        }
+        let pol = Polar::new(&lp, core, 0.0).expect("star-shaped");
+        for k in 0..200 {
+            let t = core.period() * k as f64 / 200.0;
+            let r = pol.radius(t, 0.0);
+            assert!((r - w).abs() < 0.02, "τ {t}: r {r}");
+        }
+    }
 }

@@ -41,7 +41,7 @@ fn check_opt(
         );
     }
     // 2. gap between successive orbits ≤ stepover (measured by the generator)
-    if path.method == Method::Curvilinear {
+    if matches!(path.method, Method::Curvilinear | Method::OffsetSpiral) {
         assert!(
             path.max_gap <= params.stepover + 1e-9,
             "{label}: gap {} > stepover {}",
@@ -50,7 +50,7 @@ fn check_opt(
         );
     }
     // 3. continuity (offset links are straight moves of one stepover between sampled rings)
-    let slack = if path.method == Method::Curvilinear {
+    let slack = if matches!(path.method, Method::Curvilinear | Method::OffsetSpiral) {
         1e-9
     } else {
         0.01
@@ -110,12 +110,12 @@ fn bench_case(name: &str, l: f64, coarse: bool, field: thinplan_pocketing::Field
     check(&bp.pocket, &params, &off, &format!("offset {name} L={l}"));
     check_baselines(&bp.pocket, &params, &off, &format!("{name} L={l}"));
     let cur = curvilinear_path(&bp.pocket, &params).unwrap();
-    assert_eq!(
-        cur.method,
-        Method::Curvilinear,
+    assert!(
+        matches!(cur.method, Method::Curvilinear | Method::OffsetSpiral),
         "{name}: fell back: {:?}",
         cur.fallback_reason
     );
+    assert!(cur.choice.is_some(), "{name}: no provenance of the choice");
     check(
         &bp.pocket,
         &params,
@@ -186,8 +186,30 @@ fn isogrid_triangle_satisfies_invariants() {
 
 #[test]
 fn slot_satisfies_invariants() {
-    // elongated: ridge-like maximum, straight entry then the first contour in full
+    // elongated: the offset spiral about the ridge wins (the PDE's contours crowd at the ends)
     bench_case("slot", 50.0, false, Field::Poisson);
+}
+
+/// The slot's offset spiral: wound about its ridge (a segment), it needs about as many turns as
+/// the offset path has rings (half-width / stepover), not the PDE spiral's crowded ends, so it is
+/// far shorter than the PDE spiral and no longer than the offsets held to the same gap.
+#[test]
+fn slot_uses_the_offset_spiral_about_its_ridge() {
+    let bp = bench_family(50.0)
+        .into_iter()
+        .find(|b| b.pocket.name == "slot")
+        .unwrap();
+    let params = bench_params(&bp);
+    let cur = curvilinear_path(&bp.pocket, &params).unwrap();
+    assert_eq!(cur.method, Method::OffsetSpiral, "{:?}", cur.choice);
+    assert!(cur.max_gap <= params.stepover + 1e-9);
+    let (gm, _) = offset_path_gap_matched(&bp.pocket, &params).unwrap();
+    assert!(
+        cur.length() <= 1.02 * gm.length(),
+        "offset spiral {} vs gap-matched offsets {}",
+        cur.length(),
+        gm.length()
+    );
 }
 
 #[test]
