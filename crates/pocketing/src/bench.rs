@@ -426,7 +426,7 @@ pub struct CurvilinearStats {
     pub length_mm: f64,
     pub time_s: f64,
     pub max_gap_mm: f64,
-    /// "curvilinear" or "offset-fallback".
+    /// "curvilinear", "offset-spiral" or "offset-fallback".
     pub method: String,
 }
 
