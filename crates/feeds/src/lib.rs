@@ -30,7 +30,13 @@
 //!    coefficients are `c_ik·u_i`, `(c_ik·u_{i+1} + c_{i+1,k}·u_i)/2` and `c_{i+1,k}·u_{i+1}`;
 //!    requiring the bound on all three (convex hull property) is linear in `(u_i, u_{i+1})`
 //!    and sufficient, exact at the end points and within O(spacing²) inside. `(0, 0)` is
-//!    always feasible. (Until 2026-11-23 the curvature of *either* end was applied at *both*
+//!    always feasible. A constraint whose two coefficients have the same sign (a higher
+//!    `u_i` forces a lower `u_{i+1}`: the curvature term outweighs the discretised tangential
+//!    one, on an axis nearly normal to the path or next to a long segment) is replaced by the
+//!    separable pair `u_i, u_{i+1} ≤ A_k/|α + β|` (its constant-speed point, conservative).
+//!    The feasible set is then a lattice: the greedy passes below give its greatest element,
+//!    time-optimal for the discretisation and monotone in the limits (a slower machine is
+//!    never faster; before 2026-11-23 it was, on about one random path in 5 000–7 500). (Until 2026-11-23 the curvature of *either* end was applied at *both*
 //!    end speeds: conservative by O(spacing), 2–3 % on the pocket spirals against TOPP-RA.)
 //! 4. **Backward pass** (controllable sets, as TOPP-RA): from `u_{n−1} = 0`, the largest `u_i`
 //!    for which some `u_{i+1}` in `[0, hi_{i+1}]` satisfies segment i's constraints — a
@@ -51,6 +57,9 @@
 //!    `u_i` at the largest acceleration `a⁺(u)` (a concave piecewise-linear function of `u`)
 //!    and `B` decelerates into `u_{i+1}`: closed form per linear piece, the meeting level by
 //!    safeguarded Newton; where that model cannot connect the end speeds, `max(ramp, F)`.
+//!    An end speed above `vc_i²` is lowered to it for this profile (the machine can follow
+//!    `max(ramp, profile)`, faster than either, so the time is an upper bound that falls with
+//!    the limits; until 2026-11-23 such a segment was timed by the bare ramp).
 //!    (Until 2026-11-23 a constant acceleration up to the cap was used: a heuristic whose
 //!    rate fell as the cap rose, so a faster machine could be slower.)
 //!    Long straight segments are thus timed exactly, however coarse the point spacing.
@@ -454,8 +463,18 @@ fn segment_constraints(
         // coefficients are d_k·a plus c0·x, (c0·y + c1·x)/2 and c1·y: keeping all three
         // within ±A_k keeps the whole segment within (convex hull property).
         let mut push = |ax: f64, by: f64| {
-            out[m] = (ax, by, ak);
-            out[m + 1] = (-ax, -by, ak);
+            if (ax > 0.0 && by > 0.0) || (ax < 0.0 && by < 0.0) {
+                // Coupled: a higher u_i would force a lower u_{i+1}, and the greedy forward
+                // pass is then neither optimal nor monotone in the limits. Replace
+                // |ax·x + by·y| ≤ A_k by the separable x, y ≤ A_k/|ax + by| (the constant-speed
+                // point of the line, so conservative): the feasible set stays a lattice.
+                let g = ak / (ax + by).abs();
+                out[m] = (1.0, 0.0, g);
+                out[m + 1] = (0.0, 1.0, g);
+            } else {
+                out[m] = (ax, by, ak);
+                out[m + 1] = (-ax, -by, ak);
+            }
             m += 2;
         };
         if c0 != 0.0 {
@@ -527,9 +546,11 @@ fn segment_time_any(u0: f64, u1: f64, w: &Work, c_far: &DVec3, limits: &MachineL
     } else {
         f64::INFINITY
     };
-    if u0 > w.vc2 || u1 > w.vc2 {
-        return ramp;
-    }
+    // An end above the in-segment cap (possible where accelerating unloads the saturated
+    // axis): the in-segment profile is computed from the end speed lowered to the cap. The
+    // machine can follow max(ramp, that profile), which is faster than either, so the time
+    // stays an upper bound, and it falls with the limits.
+    let (u0, u1) = (u0.min(w.vc2), u1.min(w.vc2));
     // No profile is faster than the segment at the highest speed it can reach: skip the
     // search where the ramp already achieves that bound.
     let peak = w
@@ -675,24 +696,30 @@ fn ramp_hybrid_time(u0: f64, u1: f64, lines: &[(f64, f64)], ds: f64) -> f64 {
     let g = |u: f64| climb(lines, lo, u).0 - (u - lo) / slope;
     let (mut a, mut b) = (lo, hi);
     let mut u = hi;
-    for _ in 0..100 {
-        let gu = g(u);
+    let mut gu = f64::INFINITY;
+    for _ in 0..200 {
+        gu = g(u);
         if gu > 0.0 {
             b = u;
         } else {
             a = u;
         }
+        // Stop on the residual or the bracket, never on a short step: near the level where
+        // a⁺ runs out, g' is huge and Newton crawls (it stopped at hi there, timing F
+        // itself: a faster machine came out slower, issue 6).
+        if gu.abs() <= 1e-13 * ds || b - a <= 1e-14 * b {
+            break;
+        }
         let d = 0.5 / a_at(u) - 1.0 / slope;
         let mut un = if d > 0.0 { u - gu / d } else { 0.5 * (a + b) };
-        if !(un > a && un < b) {
+        if !(un > a && un < b) || (un - u).abs() < 1e-3 * (b - a) {
             un = 0.5 * (a + b);
-        }
-        if (un - u).abs() <= 1e-14 * u {
-            break;
         }
         u = un;
     }
-    let u = b; // on the ramp side of the crossing (F has reached at least the ramp there)
+    // The crossing, to rounding; else the bracket's lower end (F has reached it before the
+    // ramp), not its upper end, which may be the level F reaches only asymptotically.
+    let u = if gu.abs() <= 1e-13 * ds { u } else { a };
     let (dist, time) = climb(lines, lo, u);
     let dist = dist.min(ds);
     time + ramp(u, hi, ds - dist)
