@@ -362,7 +362,9 @@ impl ZMap {
                     p0.z + k * if k >= 0.0 { lo } else { hi }
                 } else {
                     let s = min_convex(tool, k, perp, s0, lo, hi);
-                    let rho = perp.hypot(s - s0).min(tool.radius());
+                    let rho = (perp * perp + (s - s0) * (s - s0))
+                        .sqrt()
+                        .min(tool.radius());
                     p0.z + k * s + tool.height_at(rho).unwrap_or(0.0)
                 };
                 self.lower(i, j, z, line, &mut st);
@@ -633,7 +635,8 @@ pub(crate) fn min_convex(tool: &ToolShape, k: f64, perp: f64, s0: f64, lo: f64, 
     }
     let deriv = |t: f64| -> (f64, f64) {
         // (F'(t), F''(t)) with F(t) = k·t + h(ρ), ρ = √(perp² + t²).
-        let rho = perp.hypot(t);
+        // Not `hypot`: libm's is several times slower and mm scales cannot overflow.
+        let rho = (perp * perp + t * t).sqrt();
         if rho <= core {
             return (k, 0.0);
         }
