@@ -162,3 +162,166 @@ fn deterministic() {
     let b = collisions_json(&check_holders(&s.plan, &k, &s.brep));
     assert_eq!(a.to_string(), b.to_string());
 }
+
+/// Distance from `p` to the loops of `b` in plan view.
+fn boundary_distance(b: &thinplan_collision::Body, p: glam::DVec2) -> f64 {
+    let mut d = f64::INFINITY;
+    for lp in &b.loops {
+        for i in 0..lp.len() {
+            let (a, c) = (lp[i], lp[(i + 1) % lp.len()]);
+            let ac = c - a;
+            let t = ((p - a).dot(ac) / ac.length_squared().max(1e-300)).clamp(0.0, 1.0);
+            d = d.min((a + ac * t).distance(p));
+        }
+    }
+    d
+}
+
+/// A short tool whose holder comes down into a tall machining feature that
+/// is still in the stock: found and named; with that feature's operation
+/// run first, the same path is clean.
+#[test]
+fn a_short_holder_hits_a_tall_unremoved_feature_and_not_once_it_is_removed() {
+    let mut k = load_knowledge(None).unwrap();
+    let s = planned("tall_rib", k.clone());
+    let frame = thinplan_collision::setup_frame(s.plan.setup.up);
+    // The feature reaching highest (then the tallest): nothing is above it.
+    let (f, body) = s
+        .plan
+        .machining_features
+        .iter()
+        .filter_map(|f| Some((f, thinplan_collision::feature_body(f, &frame).ok()?)))
+        .max_by(|(_, a), (_, b)| {
+            a.z_hi
+                .total_cmp(&b.z_hi)
+                .then((a.z_hi - a.z_lo).total_cmp(&(b.z_hi - b.z_lo)))
+        })
+        .expect("tall_rib has machining features");
+    // The point deepest inside it on a 40 × 40 grid over its bounding box.
+    let (mid, room) = (0..=40 * 41)
+        .map(|n| {
+            let t = glam::DVec2::new((n % 41) as f64, (n / 41) as f64) / 40.0;
+            body.lo + (body.hi - body.lo) * t
+        })
+        .filter(|p| body.contains(*p))
+        .map(|p| (p, boundary_distance(&body, p)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .expect("a point inside");
+    assert!(room > 2.0, "{}: only {room} mm inside", f.id);
+    // A tool with no shank (flutes up to the holder) and a holder that fits
+    // inside the feature in plan view: only the feature can be hit.
+    let stickout = 10.0;
+    let holder_r = (0.5 * room).min(5.0);
+    let set = s.plan.setup.tool_set.clone();
+    let tools = &mut k.tool_sets.get_mut(&set).unwrap().tools;
+    let mut short = tools[0].clone();
+    short.id = "short".into();
+    short.flute_length = stickout;
+    short.stickout = stickout;
+    short.holder_diameter = 2.0 * holder_r;
+    short.holder_length = 30.0;
+    tools.push(short);
+    // The holder's bottom 1 mm into the feature's top, axis at `mid`.
+    let tip_z = body.z_hi - 1.0 - stickout;
+    let world = |x: f64, y: f64, z: f64| frame.to_world(DVec3::new(x, y, z));
+    let other = s
+        .plan
+        .machining_features
+        .iter()
+        .find(|g| g.id != f.id)
+        .expect("another feature")
+        .id;
+    let op = |id: u32, feature, moves: Vec<PathMove>| Operation {
+        id: OperationId(id),
+        feature,
+        method: "test".into(),
+        tool: "short".into(),
+        tool_axis: s.plan.setup.up,
+        spindle_rpm: 10_000.0,
+        start: world(mid.x, mid.y, body.z_hi + 100.0),
+        moves,
+        provenance: Provenance::new(ProvenanceSource::User, "test"),
+    };
+    let down = |p: DVec3| mv(p.to_array(), Region3::Link);
+    let mut plan = Plan::new(s.plan.part.clone(), s.plan.setup.clone());
+    plan.machining_features = s.plan.machining_features.clone();
+    // OP0 belongs to another feature and dips beside nothing but `f`;
+    // OP1 is `f`'s own operation (a move in the air: removal is by order).
+    plan.operations = vec![
+        op(
+            0,
+            other,
+            vec![
+                down(world(mid.x, mid.y, tip_z)),
+                mv(
+                    world(mid.x, mid.y, body.z_hi + 100.0).to_array(),
+                    Region3::Rapid,
+                ),
+            ],
+        ),
+        op(
+            1,
+            f.id,
+            vec![mv(
+                world(mid.x, mid.y, body.z_hi + 50.0).to_array(),
+                Region3::Rapid,
+            )],
+        ),
+    ];
+    // Every other feature is removed before (its own air operation first),
+    // so only `f` is left to hit.
+    let mut order = Vec::new();
+    for (n, g) in s.plan.machining_features.iter().enumerate() {
+        if g.id != f.id && g.id != other {
+            let id = 2 + n as u32;
+            plan.operations.push(op(
+                id,
+                g.id,
+                vec![mv(
+                    world(mid.x, mid.y, body.z_hi + 50.0).to_array(),
+                    Region3::Rapid,
+                )],
+            ));
+            order.push(OperationId(id));
+        }
+    }
+    plan.operation_order = order
+        .iter()
+        .copied()
+        .chain([OperationId(0), OperationId(1)])
+        .collect();
+    let r = check(&plan, &k, &s.brep);
+    assert!(r.unchecked.is_empty(), "{:?}", r.unchecked);
+    // The move down and the rapid back up (it starts inside) both hit it,
+    // nothing else is hit.
+    assert_eq!(r.collisions.len(), 2, "{:?}", r.collisions);
+    assert!(r
+        .collisions
+        .iter()
+        .all(|c| c.operation == OperationId(0) && c.against == Against::Feature(f.id)));
+    let c = &r.collisions[0];
+    // The axis is `room` inside the feature: the holder overlaps it by its
+    // radius plus that.
+    assert!((c.penetration - (holder_r + room)).abs() < 1e-6, "{c:?}");
+    assert_eq!(
+        (c.operation, c.move_index, c.what, c.against),
+        (OperationId(0), 0, ToolPart::Holder, Against::Feature(f.id))
+    );
+    assert!((c.lift - 1.0).abs() < 1e-6, "{c:?}");
+    assert_eq!(
+        collisions_json(&r.collisions)[0]["against"],
+        f.id.to_string()
+    );
+    // Refused (no operation in the order removes it, as for
+    // `operations.unreachable`): it stays in the stock for every later
+    // operation.
+    plan.operation_order = order.iter().copied().chain([OperationId(0)]).collect();
+    assert_eq!(check(&plan, &k, &s.brep).collisions, r.collisions);
+    // The feature's operation first: the same path is clean.
+    plan.operation_order = order
+        .into_iter()
+        .chain([OperationId(1), OperationId(0)])
+        .collect();
+    let r = check(&plan, &k, &s.brep);
+    assert!(r.collisions.is_empty(), "{:?}", r.collisions);
+}
