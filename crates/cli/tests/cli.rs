@@ -457,17 +457,21 @@ fn plan_json_machining_features_follow_the_contract() {
 /// the part except where no tool reaches). Before the stage-7 fixes of
 /// this list: crossing_ribs 642 000, tall_rib 68 624, chamfered_rib 68 646,
 /// isogrid 60 211, wall_holes 57 862, wing_rib 5 758, flange_cutouts 165,
-/// flange_web_slot 49, pentagon_pocket 2.
+/// flange_web_slot 49, pentagon_pocket 2. Before the rest pass
+/// (`methods.<id>.rest_pass`, the Ø12 along the walls' feet): chamfered_rib
+/// 10.5, crossing_ribs 728, flange_cutouts 131, flange_web_slot 49,
+/// isogrid 2961, wing_rib 507. Debug and release builds give the same plan
+/// bytes (checked on isogrid at 5f06411).
 const MISSED_ALLOWANCE: &[(&str, f64, &str)] = &[
-    ("chamfered_rib", 15.0, "cells along the rib foot where the Ø20's 1 mm corner radius leaves more than the Ø12's 0.5 mm the ideal uses"),
-    ("crossing_ribs", 800.0, "two-cell columns in the rib junctions' corners and the Ø20's corner-radius fillet along rib feet"),
-    ("flange_cutouts", 150.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab; the ideal reaches a little further"),
-    ("flange_web_slot", 60.0, "the Ø20's 1 mm corner-radius fillet along the flange foot (the Ø12, 0.5 mm, is the ideal there)"),
-    ("isogrid", 3500.0, "R5 pocket corners (remaining-material features no tool fits) that the Ø12 reaches partly from the pocket; in debug builds cavalier_contours asserts on one feature's offset (MF142, about 440 mm³) that release builds mill"),
-    ("pentagon_pocket", 1.0, "single 0.2 mm cells at the corners (the ideal is evaluated at cell centres)"),
-    ("tall_rib", 1.0, "single cells at the rib's ends"),
-    ("wall_holes", 1.0, "single cells at the wall's ends"),
-    ("wing_rib", 550.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) and cells in the pockets' sharp corners"),
+    ("chamfered_rib", 3.0, "cells at the rib's ends where the rest pass's run-off leaves the wall (measured 1.9)"),
+    ("crossing_ribs", 750.0, "two-cell columns in the rib junctions' sharp corners and the junction corners the Ø12 reaches partly from beside the feature (measured 687)"),
+    ("flange_cutouts", 160.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab; the ideal reaches a little further. Up from 131 with the rest pass: the Ø12 is now among the program's tools, so the ideal counts its reach (the unreachable share fell 65 → 8, the total leftover 196 → 165; measured 156.6)"),
+    ("flange_web_slot", 0.5, "single cells at the slot's corners (measured 0.1)"),
+    ("isogrid", 3000.0, "R5 pocket corners (remaining-material features no tool fits) that the Ø12 reaches partly from the pocket (measured 2961)"),
+    ("pentagon_pocket", 0.5, "single 0.2 mm cells at the corners (the ideal is evaluated at cell centres; measured 0.27)"),
+    ("tall_rib", 0.0, "nothing left (measured 0.0)"),
+    ("wall_holes", 0.1, "single cells at the wall's ends (measured 0.03)"),
+    ("wing_rib", 500.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) and cells in the pockets' sharp corners (measured 488)"),
 ];
 
 /// The whole pipeline to G-code, replayed by the independent stock
@@ -521,6 +525,7 @@ fn assert_machined(names: &[&str]) {
             v["leftover_missed"]["regions"]
         );
         let p: Value = serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
+        let mut reported = 0.0;
         for r in p["refusals"].as_array().unwrap() {
             if r["stage"] == "operations" {
                 assert_eq!(r["rule"], "operations.unreachable", "{name}: {r}");
@@ -528,8 +533,31 @@ fn assert_machined(names: &[&str]) {
                     r["reason"].as_str().unwrap().contains("unreachable"),
                     "{name}: {r}"
                 );
+                let vals = &r["provenance"]["values"];
+                let vol = vals["volume_mm3"].as_f64().expect("a volume estimate");
+                assert!(vol >= 0.0, "{name}: {r}");
+                // Undercuts (another set-up) are invisible to a height field.
+                if vals["seen_from_spindle"].as_f64() == Some(1.0) {
+                    reported += vol;
+                }
             }
         }
+        // The plan's unreachable estimate against the simulation's: the
+        // simulation calls unreachable only what none of the program's
+        // tools reaches from above at any point, so part of what the plan
+        // reports (corners and whole features, judged by each feature's own
+        // tool-centre region) it counts as missed instead; and it counts the
+        // smallest tool's corner-radius fillet and cells at the walls that
+        // the plan does not estimate. Hence the plan lies between the
+        // simulation's unreachable and unreachable + missed, within a slack
+        // of 30 mm³ + 10 %.
+        let unreach = v["leftover_unreachable"]["volume_mm3"].as_f64().unwrap();
+        let slack = 30.0 + 0.1 * reported;
+        assert!(
+            reported >= unreach - slack && reported <= unreach + missed + slack,
+            "{name}: the plan reports {reported:.1} mm³ unreachable, the simulation \
+             {unreach:.1} unreachable + {missed:.1} missed"
+        );
     }
 }
 

@@ -65,6 +65,11 @@ pub struct Method {
     pub mirror_layers: MirrorLayers,
     /// A separate layer at a product floor with finishing conditions.
     pub bottom_layer: Option<BottomLayer>,
+    /// A rest pass at a product floor: where the feature's tool leaves a
+    /// fillet at the foot of product walls (its corner radius), a smaller
+    /// corner radius of the tool set finishes it; `None`: no rest pass.
+    #[serde(default)]
+    pub rest_pass: Option<RestPass>,
     pub entry: LevelEntry,
     /// How far the tool may reach beyond non-product edges.
     pub overhang: Overhang,
@@ -230,6 +235,20 @@ pub struct BottomLayer {
     pub pattern: Pattern,
 }
 
+/// The rest (corner) pass along the foot of product walls on a product
+/// floor, with the tool of the set that has the smallest corner radius
+/// (then the largest diameter), when it is smaller than the feature tool's
+/// by at least `min_corner_gain`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RestPass {
+    /// Least corner-radius difference (mm) worth a pass: the fillet left
+    /// grows with the square of the difference.
+    pub min_corner_gain: f64,
+    /// Run-up onto each pass (from the floor the feature's tool cleared).
+    pub run_up: RunUp,
+}
+
 /// How the tool gets down to a z-level: never an axial plunge.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum LevelEntry {
@@ -352,6 +371,20 @@ impl MethodKnowledge {
                 out.push(format!(
                     "method `{id}`: applies to product floors but has no bottom_layer"
                 ));
+            }
+            if let Some(r) = &m.rest_pass {
+                if !(r.min_corner_gain.is_finite() && r.min_corner_gain > 0.0) {
+                    out.push(format!(
+                        "method `{id}`: rest_pass min_corner_gain {} must be positive",
+                        r.min_corner_gain
+                    ));
+                }
+                if m.applies.bottom == BottomMatch::NotProduct {
+                    out.push(format!(
+                        "method `{id}`: a rest_pass finishes product floors, but the method \
+                         applies to features without one"
+                    ));
+                }
             }
             let a = m.entry.angle_deg();
             if !(a.is_finite() && a > 0.0 && a <= 45.0) {

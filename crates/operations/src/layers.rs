@@ -5,8 +5,8 @@ use cavalier_contours::polyline::PlineSource;
 use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 use glam::{DVec2, DVec3};
 use thinplan_knowledge::{
-    FullCut, Knowledge, LevelEntry, Machine, Material, Method, MirrorLayers, Pattern, RunUp,
-    SidesMatch, SpindleDirection, Tool, ToolChoice, ToolSet,
+    FullCut, Knowledge, LevelEntry, Machine, Material, Method, MirrorLayers, Pattern, RestPass,
+    RunUp, SidesMatch, SpindleDirection, Tool, ToolChoice, ToolSet,
 };
 use thinplan_plan::{Adjacency, MachiningFeature, Provenance, ProvenanceSource};
 
@@ -60,8 +60,9 @@ pub(crate) struct Made {
     pub ops: Vec<LocalOp>,
     pub warnings: Vec<String>,
     /// Material of this feature no tool of the tool set can reach (product
-    /// corners tighter than the smallest tool), with the reason.
-    pub unreachable: Vec<String>,
+    /// corners tighter than the smallest tool), with the reason and an
+    /// estimate of its volume (mm³).
+    pub unreachable: Vec<(String, f64)>,
 }
 
 /// How a refusal for lack of any tool that fits starts (stage 7 reports it
@@ -925,7 +926,8 @@ pub(crate) fn feature_operations(
         .for_feature(bottom_product, sides)
         .ok_or_else(|| format!("no method applies (sides {sides:?})"))?;
     let mut warnings = Vec::new();
-    let mut unreachable = Vec::new();
+    let mut unreachable: Vec<String> = Vec::new();
+    let mut corners_unreached = false;
 
     // Tool: by the method's rule, smaller than the smallest product corner.
     let mut cands: Vec<&Tool> = env.tools.tools.iter().collect();
@@ -962,6 +964,7 @@ pub(crate) fn feature_operations(
                 f.id,
                 cands[0].diameter / 2.0
             ));
+            corners_unreached = true;
         } else {
             cands = small;
         }
@@ -981,6 +984,20 @@ pub(crate) fn feature_operations(
                  from the product and the free space)"
             )
         })?;
+    // The corners' volume: the region less what the tool's disc sweeps,
+    // over the feature's depth.
+    let depth = f.shape.z_max - f.shape.z_min;
+    let unreachable: Vec<(String, f64)> = unreachable
+        .into_iter()
+        .map(|r| {
+            let v = if corners_unreached {
+                unreached_area(&g) * depth
+            } else {
+                0.0
+            };
+            (r, v)
+        })
+        .collect();
     let d = tool.diameter;
     let (rpm, feed_rough, feed_finish) = conditions(env, tool);
     let boundary = m.boundary.as_ref().filter(|_| !g.product.is_empty());
@@ -1369,6 +1386,31 @@ pub(crate) fn feature_operations(
             ops.push(lop(b, prov));
         }
     }
+    // The rest pass: the fillet this tool's corner radius leaves along the
+    // product walls' feet, finished by a smaller corner radius.
+    if let Some(rp) = m
+        .rest_pass
+        .as_ref()
+        .filter(|_| bottom_product && !ops.is_empty() && !g.product.is_empty())
+    {
+        let ctx = RestCtx {
+            f,
+            m,
+            env,
+            free,
+            tool,
+            g: &g,
+            z_min,
+            z_top,
+            safe_z,
+            rapid_floor,
+        };
+        match rest_pass(&ctx, rp) {
+            Ok(Some(op)) => ops.push(op),
+            Ok(None) => {}
+            Err(e) => warnings.push(format!("{}: no rest pass: {e}", f.id)),
+        }
+    }
     if ops.is_empty() {
         return Err("the tool-centre region is empty at every z-level".into());
     }
@@ -1377,6 +1419,213 @@ pub(crate) fn feature_operations(
         warnings,
         unreachable,
     })
+}
+
+/// Signed-area sum of sampled contours (outer loops ccw, holes cw).
+fn contours_area(cs: &[Vec<[f64; 2]>]) -> f64 {
+    cs.iter()
+        .map(|c| {
+            let n = c.len();
+            (0..n)
+                .map(|i| {
+                    let (a, b) = (c[i], c[(i + 1) % n]);
+                    a[0] * b[1] - b[0] * a[1]
+                })
+                .sum::<f64>()
+                * 0.5
+        })
+        .sum()
+}
+
+/// The feature's region area (mm²): outer loop less holes.
+pub(crate) fn region_area(f: &MachiningFeature) -> f64 {
+    let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
+    let mut a = 0.0;
+    for (k, (es, _)) in edges.iter().enumerate() {
+        if es.len() < 2 {
+            continue;
+        }
+        let s = pline_from_edges(es, true).area().abs();
+        a += if k == 0 { s } else { -s };
+    }
+    a.max(0.0)
+}
+
+/// Area (mm²) of the region the tool's disc never covers, its centre
+/// anywhere in the tool-centre region (corners tighter than the tool, room
+/// the free space denies). Sampled polygons: an estimate, good to the
+/// chords' sagitta along the boundary.
+fn unreached_area(g: &Geometry) -> f64 {
+    use i_overlay::core::fill_rule::FillRule;
+    use i_overlay::core::overlay_rule::OverlayRule;
+    use i_overlay::float::single::SingleFloatOverlay;
+    let reach = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        g.centre.offset(-g.r).polygons(STEP)
+    }))
+    .unwrap_or_default();
+    let conv = |ps: &[Vec<DVec2>]| -> Vec<Vec<[f64; 2]>> {
+        ps.iter()
+            .map(|p| p.iter().map(|q| [q.x, q.y]).collect())
+            .collect()
+    };
+    let region = conv(&g.region_polys);
+    let total = contours_area(&region).abs();
+    let hit: crate::free::Shapes =
+        region.overlay_as::<i64>(&conv(&reach), OverlayRule::Intersect, FillRule::EvenOdd);
+    // Each shape: its outer contour, then its holes.
+    let hit: f64 = hit
+        .iter()
+        .map(|sh| {
+            sh.iter()
+                .enumerate()
+                .map(|(k, c)| {
+                    let a = contours_area(std::slice::from_ref(c)).abs();
+                    if k == 0 {
+                        a
+                    } else {
+                        -a
+                    }
+                })
+                .sum::<f64>()
+        })
+        .sum();
+    (total - hit).max(0.0)
+}
+
+struct RestCtx<'a> {
+    f: &'a MachiningFeature,
+    m: &'a Method,
+    env: &'a Env<'a>,
+    free: Option<&'a crate::free::Shapes>,
+    /// The feature's tool and its geometry.
+    tool: &'a Tool,
+    g: &'a Geometry,
+    z_min: f64,
+    z_top: f64,
+    safe_z: f64,
+    rapid_floor: f64,
+}
+
+/// The rest pass of a feature with a product floor (`methods.<id>.rest_pass`):
+/// boundary passes at the floor with the tool of the set that has the
+/// smallest corner radius (then the largest diameter), where that radius is
+/// smaller than the feature tool's by `min_corner_gain`. Only along stretches
+/// where the feature's tool has been beside the wall (its centre region
+/// grown by the difference of the radii), so the pass cuts the fillet and
+/// nothing more; links stay in that cleared space. `None`: no tool gains.
+fn rest_pass(c: &RestCtx, rp: &RestPass) -> Result<Option<LocalOp>, String> {
+    let mk = &c.env.k.methods;
+    let main = c.tool;
+    let mut cands: Vec<&Tool> = c
+        .env
+        .tools
+        .tools
+        .iter()
+        .filter(|t| {
+            t.corner_radius <= main.corner_radius - rp.min_corner_gain + 1e-12
+                && t.diameter <= main.diameter
+        })
+        .collect();
+    cands.sort_by(|a, b| {
+        a.corner_radius
+            .total_cmp(&b.corner_radius)
+            .then_with(|| b.diameter.total_cmp(&a.diameter))
+            .then_with(|| a.id.cmp(&b.id))
+    });
+    let Some((small, g2)) = cands
+        .iter()
+        .find_map(|t| geometry(c.f, c.m, t, c.free).map(|g| (*t, g)))
+    else {
+        return Ok(None);
+    };
+    let d2 = small.diameter;
+    // Where the small tool's disc lies inside a disc the feature's tool
+    // swept down to the floor: its centre region grown by r − r₂ (a hair
+    // more, so the chains at exactly r₂ from the walls are inside).
+    let cleared = c.g.centre.offset(-(c.g.r - g2.r + 1e-2)).polygons(STEP);
+    if cleared.is_empty() {
+        return Ok(None);
+    }
+    // Which loop stretches run along product: within the boundary band
+    // (half the boundary stepover), as for the feature's own passes.
+    let Some(bd) = c.m.boundary.as_ref() else {
+        return Ok(None);
+    };
+    let band = 0.5 * bd.stepover * d2;
+    let mut passes = Vec::new();
+    for (chain, _) in boundary_chains(&g2, band, mk.spindle) {
+        // Split where the feature's tool never came beside the wall.
+        let ok = |e: &Edge2| e.sample(STEP).iter().all(|p| inside(*p, &cleared));
+        let mut cur: Vec<Edge2> = Vec::new();
+        let mut parts = Vec::new();
+        for e in chain {
+            if ok(&e) {
+                cur.push(e);
+            } else if !cur.is_empty() {
+                parts.push(std::mem::take(&mut cur));
+            }
+        }
+        if !cur.is_empty() {
+            parts.push(cur);
+        }
+        for part in parts {
+            let len: f64 = part.iter().map(|e| e.length()).sum();
+            if len < STEP {
+                continue;
+            }
+            passes.push(boundary_pass(&part, &g2, rp.run_up, d2, &cleared));
+        }
+    }
+    if passes.is_empty() {
+        return Ok(None);
+    }
+    let space = Space {
+        centre_region: &cleared,
+        z_top: c.rapid_floor,
+        safe_z: c.safe_z,
+        step: STEP,
+    };
+    let mut b = Builder::new(DVec3::ZERO);
+    let mut started = false;
+    for p in &passes {
+        go_to(&mut b, &mut started, &space, p.start, c.z_min);
+        b.follow(&p.segs, c.z_min, Kind::Boundary);
+    }
+    retract(&mut b, c.safe_z);
+    check(&b, &g2, c.z_min, c.z_top, c.f)?;
+    let (rpm, feed_rough, feed_finish) = conditions(c.env, small);
+    let mut prov = Provenance::new(
+        ProvenanceSource::Knowledge,
+        format!("methods.{}.rest_pass", c.m.id),
+    );
+    let v = &mut prov.values;
+    v.insert("tool_diameter_mm".into(), d2);
+    v.insert("tool_corner_radius_mm".into(), small.corner_radius);
+    v.insert("feature_tool_corner_radius_mm".into(), main.corner_radius);
+    v.insert("min_corner_gain_mm".into(), rp.min_corner_gain);
+    v.insert("spindle_rpm".into(), rpm);
+    v.insert("feed_finish_mm_min".into(), feed_finish);
+    v.insert("feed_boundary_mm_min".into(), feed_finish);
+    v.insert("depth_of_cut_mm".into(), main.corner_radius);
+    v.insert("passes".into(), passes.len() as f64);
+    v.insert("layers".into(), 1.0);
+    prov.note = format!(
+        "pattern=RestPass; layer=floor; fillet of {} (corner radius {:.2} mm) finished by {} \
+         (corner radius {:.2} mm)",
+        main.id, main.corner_radius, small.id, small.corner_radius
+    );
+    Ok(Some(LocalOp {
+        method: c.m.id.clone(),
+        tool: small.id.clone(),
+        rpm,
+        feed_rough,
+        feed_finish,
+        feed_boundary: feed_finish,
+        feed_link: feed_rough * mk.link_feed_factor,
+        start: b.start,
+        moves: b.moves,
+        provenance: prov,
+    }))
 }
 
 fn spin_sign(s: SpindleDirection) -> f64 {

@@ -258,11 +258,20 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
             } else {
                 "operations.feature"
             };
+            // Material covered from the tool side is an undercut: a height
+            // field along the spindle (the stock simulation) never sees it.
+            let seen = !f.provenance.values.contains_key("access_blocked")
+                && !reason.contains("another set-up");
+            let provenance = if *unreachable {
+                unreachable_provenance(feature_volume(f), seen)
+            } else {
+                Provenance::new(ProvenanceSource::Default, rule)
+            };
             out.refusals.push(Refusal {
                 stage: Stage::Operations,
                 rule: rule.into(),
                 reason: format!("no operation for {}: {reason}", f.id),
-                provenance: Provenance::new(ProvenanceSource::Default, rule),
+                provenance,
             });
             continue;
         }
@@ -270,15 +279,12 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         match made {
             Ok(made) => {
                 out.warnings.extend(made.warnings);
-                for reason in made.unreachable {
+                for (reason, volume) in made.unreachable {
                     out.refusals.push(Refusal {
                         stage: Stage::Operations,
                         rule: "operations.unreachable".into(),
                         reason,
-                        provenance: Provenance::new(
-                            ProvenanceSource::Default,
-                            "operations.unreachable",
-                        ),
+                        provenance: unreachable_provenance(volume, true),
                     });
                 }
                 for lo in made.ops {
@@ -289,21 +295,43 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
             Err(reason) => {
                 out.warnings.push(format!("{}: {reason}", f.id));
                 // No tool fits at all: unreachable material, not a failure.
-                let rule = if reason.starts_with(layers::NO_TOOL_FITS) {
+                let unreachable = reason.starts_with(layers::NO_TOOL_FITS);
+                let rule = if unreachable {
                     "operations.unreachable"
                 } else {
                     "operations.feature"
+                };
+                let provenance = if unreachable {
+                    unreachable_provenance(feature_volume(f), true)
+                } else {
+                    Provenance::new(ProvenanceSource::Default, rule)
                 };
                 out.refusals.push(Refusal {
                     stage: Stage::Operations,
                     rule: rule.into(),
                     reason: format!("no operation for {}: {reason}", f.id),
-                    provenance: Provenance::new(ProvenanceSource::Default, rule),
+                    provenance,
                 });
             }
         }
     }
     Ok(out)
+}
+
+/// A whole feature's volume (mm³): its region over its depth.
+fn feature_volume(f: &thinplan_plan::MachiningFeature) -> f64 {
+    layers::region_area(f) * (f.shape.z_max - f.shape.z_min).max(0.0)
+}
+
+/// Provenance of unreachable material: `volume_mm3`, the estimate, and
+/// `seen_from_spindle` (1: open to the spindle, so a height-field stock
+/// simulation counts it; 0: an undercut only another set-up reaches).
+fn unreachable_provenance(volume: f64, seen: bool) -> Provenance {
+    let mut p = Provenance::new(ProvenanceSource::Default, "operations.unreachable");
+    p.values.insert("volume_mm3".into(), volume);
+    p.values
+        .insert("seen_from_spindle".into(), f64::from(u8::from(seen)));
+    p
 }
 
 /// A local operation mapped to part coordinates with its feeds and time.

@@ -100,7 +100,13 @@ pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
             }
         }
         // Fewest tool changes inside the block: by tool, stable.
-        v.sort_by(|a, b| plan.operations[*a].tool.cmp(&plan.operations[*b].tool));
+        // By tool, but a feature's rest passes after its other operations
+        // (they finish what those leave).
+        let key = |i: &usize| {
+            let o = &plan.operations[*i];
+            (o.provenance.rule.ends_with(".rest_pass"), &o.tool)
+        };
+        v.sort_by(|a, b| key(a).cmp(&key(b)));
         v
     };
     let mut done: BTreeSet<MachiningFeatureId> = BTreeSet::new();
