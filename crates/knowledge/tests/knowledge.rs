@@ -316,11 +316,11 @@ fn broken_methods_are_refused_with_every_problem() {
     // Half the tool diameter is the most a tool may cross into a neighbour;
     // a plunge (0°) is no entry; the closed-pocket method removed leaves
     // closed profiles without a method.
-    let broken = text.replacen("feature: 0.5", "feature: 0.8", 1).replacen(
-        "Ramp(angle_deg: 3.0)",
-        "Ramp(angle_deg: 0.0)",
-        1,
-    );
+    // A rest pass needs a positive corner-radius gain.
+    let broken = text
+        .replacen("feature: 0.5", "feature: 0.8", 1)
+        .replacen("Ramp(angle_deg: 3.0)", "Ramp(angle_deg: 0.0)", 1)
+        .replacen("min_corner_gain: 0.1", "min_corner_gain: -0.1", 1);
     let cut = broken.find("id: \"closed_pocket\"").unwrap();
     let start = broken[..cut].rfind("        (").unwrap();
     let end = broken.rfind("    ],").unwrap();
@@ -332,6 +332,7 @@ fn broken_methods_are_refused_with_every_problem() {
     assert!(text.contains("overhang.feature 0.8"), "{text}");
     assert!(text.contains("entry angle 0°"), "{text}");
     assert!(text.contains("Closed sides"), "{text}");
+    assert!(text.contains("min_corner_gain -0.1"), "{text}");
     assert!(text.contains("methods.ron"), "{text}");
 }
 
