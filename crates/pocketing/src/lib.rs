@@ -267,8 +267,12 @@ impl PocketPath {
     /// ⌈(R_max − ρ₁) / stepover⌉ + 1, R_max the largest distance from the centre to the roughing
     /// boundary, ρ₁ the largest of the first turn. (Each point of a turn is within the gap of
     /// the previous turn, so a turn reaches at most one stepover farther from the centre than
-    /// the one before; + 1 for the first turn.) `None` for offset paths.
+    /// the one before; + 1 for the first turn.) `None` for offset paths and for the offset
+    /// spiral (wound about a segment, not about `center`: the bound does not apply).
     pub fn turns_lower_bound(&self, stepover: f64) -> Option<usize> {
+        if self.method != Method::Curvilinear {
+            return None;
+        }
         let c = self.center?;
         let rough = self.contours.last()?;
         let rmax = rough.iter().map(|p| p.distance(c)).fold(0.0, f64::max);
