@@ -92,6 +92,7 @@ pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
     }
     // A group's operations: its features' operations, interleaved by
     // feature order (simultaneous features are machined together).
+    let is_rest_pass = |i: usize| plan.operations[i].provenance.rule.ends_with(".rest_pass");
     let members = |g: MachiningFeatureId| -> Vec<usize> {
         let mut v = Vec::new();
         for (f, ops) in &ops_of {
@@ -100,13 +101,8 @@ pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
             }
         }
         // Fewest tool changes inside the block: by tool, stable.
-        // By tool, but a feature's rest passes after its other operations
-        // (they finish what those leave).
-        let key = |i: &usize| {
-            let o = &plan.operations[*i];
-            (o.provenance.rule.ends_with(".rest_pass"), &o.tool)
-        };
-        v.sort_by(|a, b| key(a).cmp(&key(b)));
+        v.retain(|i| !is_rest_pass(*i));
+        v.sort_by(|a, b| plan.operations[*a].tool.cmp(&plan.operations[*b].tool));
         v
     };
     let mut done: BTreeSet<MachiningFeatureId> = BTreeSet::new();
@@ -158,5 +154,24 @@ pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
         }
         done.insert(best);
     }
+    // Rest passes last, by tool, in their features' order: each only
+    // finishes its own feature's floor (after its other operations), and
+    // one tool change serves them all.
+    let feature_of: BTreeMap<OperationId, MachiningFeatureId> =
+        plan.operations.iter().map(|o| (o.id, o.feature)).collect();
+    let place: BTreeMap<MachiningFeatureId, usize> = out
+        .iter()
+        .enumerate()
+        .rev()
+        .map(|(k, id)| (feature_of[id], k))
+        .collect();
+    let mut rest: Vec<usize> = (0..plan.operations.len())
+        .filter(|i| is_rest_pass(*i))
+        .collect();
+    rest.sort_by_key(|i| {
+        let o = &plan.operations[*i];
+        (o.tool.clone(), place.get(&o.feature).copied(), *i)
+    });
+    out.extend(rest.into_iter().map(|i| plan.operations[i].id));
     Ok(out)
 }
