@@ -29,6 +29,11 @@ pub struct InterferenceKnowledge {
     /// Sequence a feature before every feature it covers from the
     /// tool-access side (it blocks their tool access).
     pub accessibility: bool,
+    /// Sequence a feature before every feature it stands beside, within a
+    /// tool's reach across the other's non-product edges, higher than the
+    /// tool's flute length above the other's bottom (the shank would rub
+    /// it).
+    pub shank_access: bool,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

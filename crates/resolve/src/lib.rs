@@ -29,7 +29,9 @@ use thinplan_plan::{
 };
 
 pub mod section;
+mod shank;
 use section::{LocalMesh, Shapes};
+pub use shank::RULE_SHANK;
 
 /// Provenance rule of remaining-material features.
 pub const RULE_REMAINING: &str = "interference.remaining";
@@ -456,6 +458,22 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
     redirect(plan, &from_claim, &mut graph, &mut out);
     if kn.accessibility {
         accessibility(&geo, &slabs, kn.sliver_area, &mut graph, &mut out);
+    }
+    if kn.shank_access {
+        match k.tool_set(&plan.setup.tool_set) {
+            Some(set) => shank::shank_access(
+                &geo,
+                &slabs,
+                &set.tools,
+                kn.sliver_area,
+                &mut graph,
+                &mut out,
+            ),
+            None => out.warnings.push(format!(
+                "tool set `{}` is not in the knowledge: shank access not checked",
+                plan.setup.tool_set
+            )),
+        }
     }
     blocked_from_up(&geo, &slabs, kn.sliver_area, &mut out);
     out.order = graph.topological_order();
