@@ -2,7 +2,7 @@
 
 use cavalier_contours::polyline::{PlineSourceMut, Polyline};
 use glam::DVec2;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 use crate::geom::sample_pline;
@@ -412,7 +412,7 @@ impl BenchConfig {
 }
 
 /// Length and time of one path.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct PathStats {
     pub length_mm: f64,
     pub time_s: f64,
@@ -421,17 +421,21 @@ pub struct PathStats {
 }
 
 /// The curvilinear path's stats and the method actually used.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CurvilinearStats {
     pub length_mm: f64,
     pub time_s: f64,
     pub max_gap_mm: f64,
     /// "curvilinear", "offset-spiral" or "offset-fallback".
     pub method: String,
+    /// Why: which spiral was kept over the other, or why it fell back to offsets
+    /// ([`crate::PocketPath::choice`] / `fallback_reason`).
+    #[serde(default)]
+    pub choice: Option<String>,
 }
 
 /// One benchmark row.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct BenchRow {
     pub pocket: String,
     pub l_over_d: f64,
@@ -541,6 +545,7 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                     time_s: t_cur.total_time,
                     max_gap_mm: cur.max_gap,
                     method: cur.method.as_str().into(),
+                    choice: cur.choice.clone().or(cur.fallback_reason.clone()),
                 },
                 adaptive,
                 saving_pct: 100.0 * (1.0 - t_cur.total_time / t_off.total_time),

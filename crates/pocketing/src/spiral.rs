@@ -9,6 +9,38 @@ use crate::geom::{loop_gap, perimeter, signed_area, SegIndex};
 use crate::offset::{append_loop_from_nearest, offset_loops, offset_path, sample_level};
 use crate::{Method, Pocket, PocketError, PocketParams, PocketPath};
 
+/// Where the contour loops of a level come from.
+#[derive(Clone, Copy)]
+enum Contours<'a> {
+    /// Level sets of the field, linear on the mesh (the PDE's contours).
+    Mesh(&'a EdgeTopology),
+    /// The exact contours of the distance to the roughing boundary: the pocket's parallel
+    /// offsets by `base` + level·`dmax` (cavalier_contours), sampled at `step`. Linear
+    /// interpolation of the distance cuts notches into its contours where they cross the
+    /// distance's ridge (the field has a kink there), which made the triangle's contours not
+    /// star-shaped about their centre.
+    Offsets {
+        pocket: &'a Pocket,
+        base: f64,
+        dmax: f64,
+        step: f64,
+    },
+}
+
+impl Contours<'_> {
+    fn loops(&self, mesh: &Mesh, u: &[f64], level: f64) -> Vec<Vec<DVec2>> {
+        match *self {
+            Contours::Mesh(topo) => topo.loops(mesh, u, level),
+            Contours::Offsets {
+                pocket,
+                base,
+                dmax,
+                step,
+            } => sample_level(&offset_loops(pocket, base + level * dmax), step),
+        }
+    }
+}
+
 /// The core the orbits wind about: a point (Bieterman's centre, `len` = 0) or a segment (the
 /// ridge of an elongated pocket). Rays leave the core as the normals of a thin stadium around
 /// it, so the "winding angle" generalises to a parameter τ ∈ [0, T), T = 2·len + 2π: along the
@@ -226,7 +258,7 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
     let pde = spiral_with(
         params,
         &mesh,
-        &topo,
+        Contours::Mesh(&topo),
         &sol,
         Core::point(mesh.vertices[imax]),
         Method::Curvilinear,
@@ -245,10 +277,16 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
             .fold(0.0, f64::max)
     };
     let ridge = ridge_core(&mesh, &dist.u, dmax, h);
+    let exact = Contours::Offsets {
+        pocket,
+        base: r + f,
+        dmax,
+        step,
+    };
     let off = spiral_with(
         params,
         &mesh,
-        &topo,
+        exact,
         &dist,
         ridge,
         Method::OffsetSpiral,
@@ -331,7 +369,7 @@ fn ridge_core(mesh: &Mesh, w: &[f64], dmax: f64, h: f64) -> Core {
 fn spiral_with(
     params: &PocketParams,
     mesh: &Mesh,
-    topo: &EdgeTopology,
+    source: Contours,
     sol: &Solution,
     core: Core,
     method: Method,
@@ -342,7 +380,7 @@ fn spiral_with(
     let mut worst = 0.0;
     for _ in 0..10 {
         match attempt(
-            params, mesh, topo, sol, core, method, rough_loop, boundary, factor,
+            params, mesh, source, sol, core, method, rough_loop, boundary, factor,
         ) {
             Attempt::Fallback(reason) => return Err(reason),
             Attempt::Ok(p) => {
@@ -422,7 +460,7 @@ fn sample_turn(f: impl Fn(f64) -> DVec2, n: usize, step: f64) -> Vec<DVec2> {
 /// roughing boundary is within `target` of the last contour. `Err` when no single loop fits.
 fn choose_levels(
     mesh: &Mesh,
-    topo: &EdgeTopology,
+    source: Contours,
     sol: &Solution,
     rough_loop: &[DVec2],
     core: &[DVec2],
@@ -452,7 +490,7 @@ fn choose_levels(
         let mut best: Option<(f64, Vec<DVec2>)> = None;
         for _ in 0..40 {
             let mid = 0.5 * (lo + hi);
-            let mut l = topo.loops(mesh, &sol.u, mid);
+            let mut l = source.loops(mesh, &sol.u, mid);
             let ok = if l.len() == 1 {
                 let lp = l.pop().unwrap();
                 let g = match out.last() {
@@ -492,7 +530,7 @@ fn choose_levels(
 fn attempt(
     params: &PocketParams,
     mesh: &Mesh,
-    topo: &EdgeTopology,
+    source: Contours,
     sol: &Solution,
     core: Core,
     method: Method,
@@ -523,7 +561,7 @@ fn attempt(
     // --- levels, outward from the maximum: greedy with the target gap, then the smallest
     // target that needs no more contours (so the gaps come out even instead of leaving a thin
     // last orbit)
-    let Ok(first) = choose_levels(mesh, topo, sol, rough_loop, &core_pts, target) else {
+    let Ok(first) = choose_levels(mesh, source, sol, rough_loop, &core_pts, target) else {
         return Attempt::Fallback("no single contour within the stepover below the maximum".into());
     };
     let n0 = first.len();
@@ -531,7 +569,7 @@ fn attempt(
     let mut chosen = first;
     for _ in 0..6 {
         let mid = 0.5 * (lo + hi);
-        match choose_levels(mesh, topo, sol, rough_loop, &core_pts, mid) {
+        match choose_levels(mesh, source, sol, rough_loop, &core_pts, mid) {
             Ok(l) if l.len() <= n0 => {
                 hi = mid;
                 chosen = l;

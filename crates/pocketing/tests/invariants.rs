@@ -116,6 +116,14 @@ fn bench_case(name: &str, l: f64, coarse: bool, field: thinplan_pocketing::Field
         cur.fallback_reason
     );
     assert!(cur.choice.is_some(), "{name}: no provenance of the choice");
+    // every bench pocket is star-shaped about its centre or ridge, so both spirals must be
+    // built and compared (the triangle's offset spiral was refused while its contours came
+    // from the distance interpolated on the mesh, notched at the ridge)
+    let choice = cur.choice.as_deref().unwrap_or("");
+    assert!(
+        !choice.contains("failed"),
+        "{name} L={l}: a spiral was refused: {choice}"
+    );
     check(
         &bp.pocket,
         &params,
