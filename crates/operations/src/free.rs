@@ -191,3 +191,83 @@ fn without_slits(shapes: Shapes) -> Shapes {
         })
         .collect()
 }
+
+/// A machining feature that may still stand beside a feature when that
+/// feature is cut: its plan-view region (feature frame) and its top.
+#[derive(Debug, Clone)]
+pub(crate) struct Obstacle {
+    pub id: thinplan_plan::MachiningFeatureId,
+    pub region: Vec<Vec<[f64; 2]>>,
+    pub top: f64,
+}
+
+/// Features whose material may still stand when `plan.machining_features[i]`
+/// is cut (no chain of `Before` constraints or shank edges puts them
+/// first), within `margin` of it in plan view, in its frame, and reaching
+/// higher than `rise` above its bottom: where the tool cuts lower than a
+/// flute length below such a feature's top, its shank must keep out of it.
+pub(crate) fn shank_obstacles(
+    plan: &Plan,
+    i: usize,
+    margin: f64,
+    rise: f64,
+    edges: &[(
+        thinplan_plan::MachiningFeatureId,
+        thinplan_plan::MachiningFeatureId,
+    )],
+) -> Vec<Obstacle> {
+    use thinplan_plan::ConstraintKind;
+    let f = &plan.machining_features[i];
+    let n = plan.machining_features.len();
+    // Ancestors of i: removed before i is cut, whatever order stage 8 picks.
+    let mut preds: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let before_edges = plan
+        .machining_constraints
+        .iter()
+        .filter(|c| c.kind == ConstraintKind::Before)
+        .map(|c| (c.first, c.second))
+        .chain(edges.iter().copied());
+    for (a, b) in before_edges {
+        let (a, b) = (a.0 as usize, b.0 as usize);
+        if a < n && b < n {
+            preds[b].push(a);
+        }
+    }
+    let mut before = vec![false; n];
+    let mut stack = vec![i];
+    while let Some(v) = stack.pop() {
+        for &p in &preds[v] {
+            if !before[p] {
+                before[p] = true;
+                stack.push(p);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for (j, g) in plan.machining_features.iter().enumerate() {
+        if j == i || before[j] || !crate::precedence::shank_neighbour(f, g, margin, rise) {
+            continue;
+        }
+        out.push(Obstacle {
+            id: g.id,
+            region: region(g),
+            top: g.shape.z_max,
+        });
+    }
+    out
+}
+
+/// The free space less the obstacles' regions (each an outer contour and
+/// holes; taken one at a time so one's hole never cancels another's area).
+pub(crate) fn without(free: &Shapes, obstacles: &[&Obstacle]) -> Shapes {
+    let mut out = free.clone();
+    for o in obstacles {
+        let clip: Shapes = o.region.overlay_as::<i64>(
+            &Vec::<Vec<[f64; 2]>>::new(),
+            OverlayRule::Subject,
+            FillRule::EvenOdd,
+        );
+        out = out.overlay_as::<i64>(&clip, OverlayRule::Difference, FillRule::NonZero);
+    }
+    without_slits(out)
+}

@@ -18,6 +18,7 @@ pub mod geom;
 mod layers;
 pub mod order;
 pub mod path;
+pub mod precedence;
 
 use std::collections::BTreeMap;
 
@@ -147,6 +148,13 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         refusals: Vec::new(),
     };
     let d_max = tools.tools.iter().map(|t| t.diameter).fold(0.0, f64::max);
+    let min_flute = tools
+        .tools
+        .iter()
+        .map(|t| t.flute_length)
+        .fold(f64::INFINITY, f64::min);
+    // The same edges stage 8 honours: what stands when a feature is cut.
+    let shank_edges = precedence::shank_edges(plan, d_max, min_flute);
     // Features that get no operation, and every feature they cover from
     // the tool side (accessibility constraints): machining those would
     // plunge or rapid into material that is still there.
@@ -176,12 +184,13 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
                 continue;
             }
             let free = free::free_space(plan, i, 2.0 * d_max);
+            let obstacles = free::shank_obstacles(plan, i, d_max, min_flute, &shank_edges);
             // A geometry library panicking on an awkward profile
             // (cavalier_contours asserts on some degenerate offsets) refuses
             // this feature, not the plan.
             let attempt = |env: &layers::Env| {
                 std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    layers::feature_operations(f, env, free.as_ref())
+                    layers::feature_operations(f, env, free.as_ref(), &obstacles)
                 }))
                 .unwrap_or_else(|_| {
                     Err("the offset geometry failed on this profile (library panic)".into())

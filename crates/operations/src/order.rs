@@ -10,6 +10,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use glam::DVec3;
+use thinplan_knowledge::Knowledge;
 use thinplan_plan::{ConstraintKind, MachiningFeatureId, OperationId, Plan, Stage};
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -20,12 +21,17 @@ pub enum OrderError {
     Cycle(Vec<MachiningFeatureId>),
 }
 
-/// Stage 8: a topological order of the plan's operations.
-pub fn order(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
+/// Stage 8: a topological order of the plan's operations. Besides the
+/// machining constraints it honours the shank edges (`precedence.rs`): a
+/// taller neighbour that stage 7 took as removed runs first.
+pub fn order(plan: &Plan, k: &Knowledge) -> Result<Vec<OperationId>, OrderError> {
     if !plan.stages_done.contains(&Stage::Operations) {
         return Err(OrderError::MissingStage(Stage::Operations));
     }
-    order_unchecked(plan)
+    let edges = crate::precedence::reach_and_rise(plan, k)
+        .map(|(d, rise)| crate::precedence::shank_edges(plan, d, rise))
+        .unwrap_or_default();
+    order_with_edges(plan, &edges)
 }
 
 /// Fills `plan.operation_order` and records stage 8.
@@ -50,8 +56,16 @@ fn find(
     r
 }
 
-/// Stage 8 without the stage check.
+/// Stage 8 without the stage check and without shank edges.
 pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
+    order_with_edges(plan, &[])
+}
+
+/// Stage 8 with extra `Before` edges between features.
+pub fn order_with_edges(
+    plan: &Plan,
+    extra: &[(MachiningFeatureId, MachiningFeatureId)],
+) -> Result<Vec<OperationId>, OrderError> {
     // Features that have operations, and their operations in stage-7 order.
     let mut ops_of: BTreeMap<MachiningFeatureId, Vec<usize>> = BTreeMap::new();
     for (i, o) in plan.operations.iter().enumerate() {
@@ -61,6 +75,10 @@ pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
     for c in &plan.machining_constraints {
         feats.insert(c.first);
         feats.insert(c.second);
+    }
+    for (a, b) in extra {
+        feats.insert(*a);
+        feats.insert(*b);
     }
     // Simultaneous groups by union-find (the smallest id represents).
     let mut parent: BTreeMap<MachiningFeatureId, MachiningFeatureId> =
@@ -87,6 +105,12 @@ pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
             if a == b {
                 return Err(OrderError::Cycle(vec![c.first, c.second]));
             }
+            preds.get_mut(&b).expect("every group").insert(a);
+        }
+    }
+    for (a, b) in extra {
+        let (a, b) = (group_of[a], group_of[b]);
+        if a != b {
             preds.get_mut(&b).expect("every group").insert(a);
         }
     }

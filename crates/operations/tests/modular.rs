@@ -326,7 +326,7 @@ fn same_plan_same_operations_twice() {
     assert_eq!(format!("{a:?}"), format!("{b:?}"));
     let mut p = plan.clone();
     a.apply_to(&mut p);
-    let order = thinplan_operations::order(&p).unwrap();
+    let order = thinplan_operations::order(&p, &k).unwrap();
     thinplan_operations::order::apply_order(&mut p, order);
     assert_eq!(p.operation_order.len(), p.operations.len());
     let mut total = 0.0;

@@ -349,7 +349,7 @@ impl Session {
             }
             Stage::Order => {
                 needs(Stage::Operations)?;
-                let order = thinplan_operations::order(&self.plan)
+                let order = thinplan_operations::order(&self.plan, &self.knowledge)
                     .map_err(|e| PipelineError::new(ErrorKind::Stage, e.to_string()))?;
                 thinplan_operations::order::apply_order(&mut self.plan, order);
                 Ok(())
