@@ -277,22 +277,41 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
             .fold(0.0, f64::max)
     };
     let ridge = ridge_core(&mesh, &dist.u, dmax, h);
-    let exact = Contours::Offsets {
-        pocket,
-        base: r + f,
-        dmax,
-        step,
-    };
+    // the distance's contours on the mesh first: linear interpolation softens the offsets'
+    // corners, which the feed schedule rewards (slot: 4.6 % vs 9.4 % saving over `gapm` at
+    // L/D 1 with the exact offsets); where they are notched at the ridge and so not
+    // star-shaped (the triangle), the exact offsets
+    let mut offsets_note = "";
     let off = spiral_with(
         params,
         &mesh,
-        exact,
+        Contours::Mesh(&topo),
         &dist,
         ridge,
         Method::OffsetSpiral,
         &rough_loop,
         &boundary,
-    );
+    )
+    .or_else(|on_mesh| {
+        offsets_note = " on the exact offsets";
+        let exact = Contours::Offsets {
+            pocket,
+            base: r + f,
+            dmax,
+            step,
+        };
+        spiral_with(
+            params,
+            &mesh,
+            exact,
+            &dist,
+            ridge,
+            Method::OffsetSpiral,
+            &rough_loop,
+            &boundary,
+        )
+        .map_err(|e| format!("{e} (on the mesh: {on_mesh})"))
+    });
     match (pde, off) {
         (Ok(a), Ok(b)) => {
             // the offset spiral only where it needs fewer turns (an elongated pocket, where the
@@ -303,8 +322,8 @@ pub fn curvilinear_path(pocket: &Pocket, params: &PocketParams) -> Result<Pocket
             let (la, lb) = (a.length(), b.length());
             let mut win = if tb < ta { b } else { a };
             win.choice = Some(format!(
-                "{}: curvilinear {ta} turns {la:.1} mm, offset-spiral {tb} turns {lb:.1} mm \
-                 (the offset spiral only with fewer turns)",
+                "{}: curvilinear {ta} turns {la:.1} mm, offset-spiral{offsets_note} {tb} turns \
+                 {lb:.1} mm (the offset spiral only with fewer turns)",
                 win.method.as_str()
             ));
             Ok(win)
