@@ -96,7 +96,8 @@ fn a_short_stickout_is_found_in_the_planned_tall_rib() {
     let s = planned("tall_rib", k.clone());
     let c = check_holders(&s.plan, &k, &s.brep);
     // Independently: the first move in the order whose tip goes below the
-    // rib's top less the stickout, with the em20, beside the rib.
+    // rib's top less the stickout, with the em20, beside the rib or the
+    // steps (as tall as the rib) that still stand.
     let rib_top = 92.0;
     let mut expected = None;
     'ops: for id in &s.plan.operation_order {
@@ -112,16 +113,34 @@ fn a_short_stickout_is_found_in_the_planned_tall_rib() {
         }
     }
     let expected = expected.expect("some move goes deep enough");
+    // The remaining material around the rib's steps runs first (the shank
+    // rule), beside the steps that still stand as tall as the rib: the
+    // holder's first hit may be one of them rather than the rib itself.
     let first = c
         .iter()
-        .find(|c| c.what == ToolPart::Holder && c.against == Against::Part)
-        .expect("the holder hits the rib");
+        .find(|c| c.what == ToolPart::Holder)
+        .expect("the holder hits the rib or the steps beside it");
+    assert!(
+        c.iter()
+            .any(|c| c.what == ToolPart::Holder && c.against == Against::Part),
+        "the holder hits the rib somewhere: {c:?}"
+    );
     assert_eq!((first.operation, first.move_index), expected, "{c:?}");
 }
 
-/// The bundled samples as planned today: holder collisions are a failure;
-/// shank collisions (with material no operation removes) are printed so the
-/// numbers stay visible.
+/// Shank collisions each sample may still have (all with a flange step cut
+/// before the web layers standing over it: the sequencing rule "flange
+/// before the wall it is on" outranks the shank-access rule there, and the
+/// step is narrower than the tool). Every other sample has none.
+const SHANK_ALLOWANCE: &[(&str, usize)] = &[
+    ("flange_cutouts", 128),
+    ("flange_web_slot", 75),
+    ("wing_rib", 105),
+];
+
+/// The bundled samples as planned today: no holder collision at all, and no
+/// more shank collisions than [`SHANK_ALLOWANCE`] (printed, so the numbers
+/// stay visible).
 #[test]
 fn planned_samples_have_no_holder_collision() {
     let mut failures = Vec::new();
@@ -149,6 +168,16 @@ fn planned_samples_have_no_holder_collision() {
         );
         if holder > 0 {
             failures.push(format!("{name}: {holder} holder collision(s)"));
+        }
+        let shank = r.collisions.len() - holder;
+        let allowed = SHANK_ALLOWANCE
+            .iter()
+            .find(|(n, _)| n == name)
+            .map_or(0, |(_, a)| *a);
+        if shank > allowed {
+            failures.push(format!(
+                "{name}: {shank} shank collision(s), at most {allowed} allowed"
+            ));
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
