@@ -155,8 +155,10 @@ fn check_baselines(pocket: &Pocket, params: &PocketParams, off: &PocketPath, lab
         sharp.length() <= off.length() + 1e-6,
         "{label}: sharp longer"
     );
+    // a circle's rings have no straight sides, so no fillet to flatten: the same path
+    let fillets = pocket.name != "circle";
     assert!(
-        sharp.points.len() < off.points.len(),
+        sharp.points.len() < off.points.len() || (!fillets && sharp.points == off.points),
         "{label}: no arc flattened"
     );
     let finish_len = |p: &PocketPath| -> f64 {
