@@ -13,9 +13,12 @@
 //!   splits or the pocket has islands.
 //! * [`bench::bench_pockets`]: both paths (and FreeCAD Adaptive when available) timed with the
 //!   project's feed schedule on a family of pockets over L/D.
+//! * [`engagement::engagement_stats`]: the tool's engagement angle and radial engagement along
+//!   any path, measured by replaying it over uncut stock.
 
 pub mod bench;
 pub mod contour;
+pub mod engagement;
 pub mod fem;
 pub mod geom;
 pub mod offset;

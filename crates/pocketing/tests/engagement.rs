@@ -1,0 +1,145 @@
+//! The engagement measure against textbook cases: a slot through uncut stock engages half the
+//! tool (180°, radial D); a straight pass at radial width a beside a straight wall of uncut
+//! material engages acos(1 − 2a/D); a pass over cleared stock engages nothing.
+
+use glam::DVec2;
+use proptest::prelude::*;
+use thinplan_pocketing::engagement::{
+    engagement_profile, engagement_stats, EngagementParams, Entry,
+};
+
+/// Angle resolution of the default measure (180° / 360 probes) plus rounding.
+const TOL_DEG: f64 = 0.5 + 1e-9;
+
+fn rot(p: DVec2, ang: f64, origin: DVec2) -> DVec2 {
+    origin + DVec2::from_angle(ang).rotate(p)
+}
+
+#[test]
+fn slot_through_uncut_stock_is_180_degrees() {
+    let d = 10.0;
+    let path = [DVec2::new(0.0, 0.0), DVec2::new(10.0 * d, 0.0)];
+    let prof = engagement_profile(&path, d, Entry::Plunge, &EngagementParams::default());
+    assert!(prof.len() >= 400, "{} positions", prof.len());
+    for e in &prof {
+        assert!((e.angle_deg - 180.0).abs() <= TOL_DEG, "{e:?}");
+        assert!((e.radial_mm - d).abs() <= 1e-3 * d, "{e:?}");
+    }
+    let st = engagement_stats(&path, d, Entry::Plunge, &EngagementParams::default()).unwrap();
+    assert!((st.max_engagement_deg - 180.0).abs() <= TOL_DEG);
+    assert!((st.p99_engagement_deg - 180.0).abs() <= TOL_DEG);
+}
+
+/// A slot along +x (its material removed up to y = R), back to the start on the line y = a
+/// (moving −x) — the second pass's disc reaches y = a + R, so it removes a strip of width a
+/// of the uncut wall y > R. Its cutting edge meets uncut material where R·sin ψ > R − a, ψ the
+/// angle of the edge point from the direction of motion towards the wall (ψ ∈ (0°, 90°], the
+/// front half): ψ from asin(1 − a/R) to 90°, an arc of 90° − asin(1 − 2a/D) = acos(1 − 2a/D).
+fn wall_pass(d: f64, a: f64, ang: f64, origin: DVec2) -> (f64, f64) {
+    let l = 8.0 * d;
+    let path: Vec<DVec2> = [
+        DVec2::new(0.0, 0.0),
+        DVec2::new(l, 0.0),
+        DVec2::new(l, a),
+        DVec2::new(0.0, a),
+    ]
+    .iter()
+    .map(|p| rot(*p, ang, origin))
+    .collect();
+    let prof = engagement_profile(&path, d, Entry::Plunge, &EngagementParams::default());
+    // the return pass, away from both ends
+    let s0 = l + a;
+    let mid: Vec<_> = prof
+        .iter()
+        .filter(|e| e.s > s0 + 2.0 * d && e.s < s0 + l - 2.0 * d)
+        .collect();
+    assert!(mid.len() > 50);
+    let amax = mid.iter().map(|e| e.angle_deg).fold(0.0, f64::max);
+    let amin = mid
+        .iter()
+        .map(|e| e.angle_deg)
+        .fold(f64::INFINITY, f64::min);
+    assert!(amax - amin <= 2.0 * TOL_DEG, "not steady: {amin}..{amax}");
+    let rmax = mid.iter().map(|e| e.radial_mm).fold(0.0, f64::max);
+    (amax, rmax)
+}
+
+#[test]
+fn pass_beside_a_wall_gives_the_textbook_angle() {
+    let d: f64 = 12.0;
+    for frac in [0.05, 0.1, 0.25, 0.4, 0.5, 0.75, 1.0] {
+        let a = frac * d;
+        let want = (1.0 - 2.0 * a / d).acos().to_degrees();
+        let (got, radial) = wall_pass(d, a, 0.0, DVec2::ZERO);
+        assert!(
+            (got - want).abs() <= TOL_DEG,
+            "a = {a}: engagement {got}° vs acos(1 − 2a/D) = {want}°"
+        );
+        // the probes nearest the arc's ends lie within half a probe spacing of them
+        let res = d / 2.0 * (std::f64::consts::PI / 360.0);
+        assert!((radial - a).abs() <= res, "a = {a}: radial {radial}");
+    }
+}
+
+#[test]
+fn pass_over_cleared_stock_engages_nothing() {
+    let d = 8.0;
+    // a slot, then back along it and along it again: everything under the tool is cleared
+    let path = [
+        DVec2::new(0.0, 0.0),
+        DVec2::new(6.0 * d, 0.0),
+        DVec2::new(0.0, 0.0),
+        DVec2::new(5.0 * d, 0.0),
+    ];
+    let prof = engagement_profile(&path, d, Entry::Plunge, &EngagementParams::default());
+    let back: Vec<_> = prof.iter().filter(|e| e.s > 6.0 * d + 1e-6).collect();
+    assert!(back.len() > 100);
+    for e in back {
+        assert_eq!(e.angle_deg, 0.0, "{e:?}");
+        assert_eq!(e.radial_mm, 0.0, "{e:?}");
+    }
+}
+
+#[test]
+fn entry_is_excluded_and_a_helix_clears_its_hole() {
+    let d = 10.0;
+    // first move out of the plunge is already a 180° slot, never the 360° of the plunge
+    let path = [DVec2::new(0.0, 0.0), DVec2::new(d, 0.0)];
+    let prof = engagement_profile(&path, d, Entry::Plunge, &EngagementParams::default());
+    assert!(prof[0].angle_deg <= 180.0 + TOL_DEG);
+    // a helix of radius D about the start: the first D of a straight move stays inside the
+    // hole of radius 1.5 D (the tool's edge reaches 1.5 D at s = D); the whole front half is
+    // out of it once s² + R² > (1.5 D)², s > √2 D
+    let path = [DVec2::new(0.0, 0.0), DVec2::new(3.0 * d, 0.0)];
+    let helix = Entry::Helix {
+        center: DVec2::ZERO,
+        radius: d,
+    };
+    let prof = engagement_profile(&path, d, helix, &EngagementParams::default());
+    for e in &prof {
+        if e.s < 0.99 * d {
+            assert_eq!(e.angle_deg, 0.0, "{e:?}");
+        }
+        if e.s > 1.42 * d {
+            assert!((e.angle_deg - 180.0).abs() <= TOL_DEG, "{e:?}");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+    /// The textbook angle for any tool, width, direction and place.
+    #[test]
+    fn wall_pass_matches_acos_anywhere(
+        d in 1.0f64..50.0,
+        frac in 0.02f64..1.0,
+        ang in 0.0f64..std::f64::consts::TAU,
+        ox in -500.0f64..500.0,
+        oy in -500.0f64..500.0,
+    ) {
+        let a = frac * d;
+        let want = (1.0 - 2.0 * a / d).acos().to_degrees();
+        let (got, _) = wall_pass(d, a, ang, DVec2::new(ox, oy));
+        prop_assert!((got - want).abs() <= TOL_DEG, "a/D {frac}: {got}° vs {want}°");
+    }
+}
