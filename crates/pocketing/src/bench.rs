@@ -5,6 +5,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
+use crate::engagement::{engagement_stats, EngagementParams, EngagementStats, Entry};
 use crate::geom::sample_pline;
 use crate::timing::{time_path, MachineLimits};
 use crate::{
@@ -131,6 +132,12 @@ impl AdaptivePeer {
 
     /// Run FreeCAD's Adaptive2d on the pocket; the tool-centre path as one polyline.
     pub fn run(&self, pocket: &Pocket, params: &PocketParams) -> Result<Vec<DVec2>, String> {
+        self.run_path(pocket, params).map(|p| p.points)
+    }
+
+    /// Run FreeCAD's Adaptive2d on the pocket: the tool-centre path as one polyline and the
+    /// helix it enters by.
+    pub fn run_path(&self, pocket: &Pocket, params: &PocketParams) -> Result<AdaptivePath, String> {
         let size = pocket.size();
         let pts = sample_pline(&pocket.outer, size / 400.0, 2f64.to_radians());
         let input = serde_json::json!({
@@ -169,7 +176,50 @@ impl AdaptivePeer {
         if pts.len() < 2 {
             return Err("FreeCAD Adaptive returned no path".into());
         }
-        Ok(pts)
+        // FreeCAD enters each region by a helix about HelixCenterPoint through StartPoint
+        // (PathAdaptive.py: radius = their distance); the helix is not in `points`
+        let helix = match (v["helix_center"].as_array(), v["helix_radius"].as_f64()) {
+            (Some(c), Some(r)) => c[0]
+                .as_f64()
+                .zip(c[1].as_f64())
+                .map(|(x, y)| (DVec2::new(x, y), r)),
+            _ => None,
+        };
+        let lifted_moves = v["motion_types"]
+            .as_array()
+            .is_some_and(|t| t.iter().any(|m| m.as_i64() == Some(2)));
+        let regions = v["regions"].as_u64().unwrap_or(1) as usize;
+        Ok(AdaptivePath {
+            points: pts,
+            helix,
+            regions,
+            lifted_moves,
+        })
+    }
+}
+
+/// FreeCAD Adaptive's output.
+#[derive(Debug, Clone)]
+pub struct AdaptivePath {
+    /// Tool-centre path, every move in order.
+    pub points: Vec<DVec2>,
+    /// Entry helix of the first region (centre, tool-centre radius); `None` from an older
+    /// script.
+    pub helix: Option<(DVec2, f64)>,
+    /// Cleared regions (each entered by its own helix).
+    pub regions: usize,
+    /// Whether the path has "link not clear" moves (lifted over uncut stock in FreeCAD; the
+    /// bench replays them at cutting depth).
+    pub lifted_moves: bool,
+}
+
+impl AdaptivePath {
+    /// The material cleared by the entry, for the engagement measure.
+    pub fn entry(&self) -> Entry {
+        match self.helix {
+            Some((center, radius)) => Entry::Helix { center, radius },
+            None => Entry::Plunge,
+        }
     }
 }
 
@@ -380,6 +430,9 @@ pub struct BenchConfig {
     /// Field and distance blend of the curvilinear paths (see [`PocketParams`]).
     pub field: crate::Field,
     pub distance_blend: f64,
+    /// Measure the engagement of every path ([`crate::engagement`]); `None` = skip (the
+    /// engagement fields are then null).
+    pub engagement: Option<EngagementParams>,
 }
 
 impl Default for BenchConfig {
@@ -394,6 +447,7 @@ impl Default for BenchConfig {
             toppra: ToppraPeer::detect(),
             field: crate::Field::Poisson,
             distance_blend: 0.0,
+            engagement: Some(EngagementParams::default()),
         }
     }
 }
@@ -418,6 +472,27 @@ pub struct PathStats {
     pub time_s: f64,
     /// Max measured gap between successive orbits (mm); null for peers.
     pub max_gap_mm: Option<f64>,
+    /// Engagement measured on the material ([`crate::engagement`]): max and 99th percentile
+    /// engagement angle (degrees), max radial engagement (mm); null when not measured.
+    #[serde(default)]
+    pub max_engagement_deg: Option<f64>,
+    #[serde(default)]
+    pub p99_engagement_deg: Option<f64>,
+    #[serde(default)]
+    pub max_radial_mm: Option<f64>,
+}
+
+impl PathStats {
+    fn new(t: &crate::timing::Schedule, max_gap: Option<f64>, e: Option<EngagementStats>) -> Self {
+        PathStats {
+            length_mm: t.length,
+            time_s: t.total_time,
+            max_gap_mm: max_gap,
+            max_engagement_deg: e.map(|e| e.max_engagement_deg),
+            p99_engagement_deg: e.map(|e| e.p99_engagement_deg),
+            max_radial_mm: e.map(|e| e.max_radial_mm),
+        }
+    }
 }
 
 /// The curvilinear path's stats and the method actually used.
@@ -432,6 +507,13 @@ pub struct CurvilinearStats {
     /// ([`crate::PocketPath::choice`] / `fallback_reason`).
     #[serde(default)]
     pub choice: Option<String>,
+    /// As in [`PathStats`].
+    #[serde(default)]
+    pub max_engagement_deg: Option<f64>,
+    #[serde(default)]
+    pub p99_engagement_deg: Option<f64>,
+    #[serde(default)]
+    pub max_radial_mm: Option<f64>,
 }
 
 /// One benchmark row.
@@ -507,23 +589,38 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
             let t_cur = time_path(&cur.points, feed, &cfg.limits);
             let t_sharp = time_path(&sharp.points, feed, &cfg.limits);
             let t_matched = time_path(&matched.points, feed, &cfg.limits);
-            let stats = |t: &crate::timing::Schedule, p: &crate::PocketPath| PathStats {
-                length_mm: t.length,
-                time_s: t.total_time,
-                max_gap_mm: Some(p.max_gap),
+            let tool = params.tool_diameter;
+            // our paths plunge at their first point
+            let eng = |pts: &[DVec2], entry: Entry| {
+                cfg.engagement
+                    .as_ref()
+                    .and_then(|ep| engagement_stats(pts, tool, entry, ep))
             };
+            let stats = |t: &crate::timing::Schedule, p: &crate::PocketPath| {
+                PathStats::new(t, Some(p.max_gap), eng(&p.points, Entry::Plunge))
+            };
+            let e_cur = eng(&cur.points, Entry::Plunge);
             let adaptive = cfg
                 .adaptive
                 .as_ref()
                 .filter(|_| ld <= cfg.adaptive_max_l_over_d);
             let adaptive = adaptive.and_then(|peer| {
-                peer.run(&bp.pocket, &params).ok().map(|pts| {
-                    let t = time_path(&pts, feed, &cfg.limits);
-                    PathStats {
-                        length_mm: t.length,
-                        time_s: t.total_time,
-                        max_gap_mm: None,
+                peer.run_path(&bp.pocket, &params).ok().map(|ap| {
+                    if ap.regions != 1 || ap.lifted_moves {
+                        eprintln!(
+                            "note: FreeCAD Adaptive on {} (L/D {ld}): {} regions{}; engagement \
+                             counts only the first region's helix",
+                            bp.pocket.name,
+                            ap.regions,
+                            if ap.lifted_moves {
+                                ", lifted links replayed at depth"
+                            } else {
+                                ""
+                            }
+                        );
                     }
+                    let t = time_path(&ap.points, feed, &cfg.limits);
+                    PathStats::new(&t, None, eng(&ap.points, ap.entry()))
                 })
             });
             if cfg.toppra.is_some() {
@@ -535,17 +632,16 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                 size_mm: l,
                 stepover_mm: params.stepover,
                 tool_mm: params.tool_diameter,
-                offset: PathStats {
-                    length_mm: t_off.length,
-                    time_s: t_off.total_time,
-                    max_gap_mm: Some(off.max_gap),
-                },
+                offset: stats(&t_off, &off),
                 curvilinear: CurvilinearStats {
                     length_mm: t_cur.length,
                     time_s: t_cur.total_time,
                     max_gap_mm: cur.max_gap,
                     method: cur.method.as_str().into(),
                     choice: cur.choice.clone().or(cur.fallback_reason.clone()),
+                    max_engagement_deg: e_cur.map(|e| e.max_engagement_deg),
+                    p99_engagement_deg: e_cur.map(|e| e.p99_engagement_deg),
+                    max_radial_mm: e_cur.map(|e| e.max_radial_mm),
                 },
                 adaptive,
                 saving_pct: 100.0 * (1.0 - t_cur.total_time / t_off.total_time),
@@ -579,16 +675,17 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
 
 /// The rows as a fixed-width text table. `save %` columns: curvilinear time saving over the
 /// arc offset baseline (`offset`), the sharp-cornered one (`sharp`) and the gap-matched one
-/// (`gapm`, ring stepover `s'`); `turns/bd/rings`: spiral turns, their lower bound, offset rings.
+/// (`gapm`, ring stepover `s'`); `turns/bd/rings`: spiral turns, their lower bound, offset rings;
+/// `eng max°`: max engagement angle of offset / curvilinear / gap-matched / Adaptive paths.
 pub fn format_table(rows: &[BenchRow]) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<17} {:>5} {:>6} {:>5} {:>5} | {:>6} {:>6} | {:>7} {:>6} {:>11} | {:>6} {:>6} | {:>6} | {:>5} {:>7} {:>6} | {:>6} {:>6} {:>6} | {:>10} | {:>13}",
+        "{:<17} {:>5} {:>6} {:>5} {:>5} | {:>6} {:>6} | {:>7} {:>6} {:>11} | {:>6} {:>6} | {:>6} | {:>5} {:>7} {:>6} | {:>6} {:>6} {:>6} | {:>10} | {:>13} | {:>19}",
         "pocket", "L/D", "L mm", "tool", "step", "off mm", "off s", "curv mm", "curv s", "method",
         "adp mm", "adp s", "shrp s", "s'", "gapm mm", "gapm s", "save%", "sharp", "gapm",
-        "turns/bd/r", "TOPP-RA s/n"
+        "turns/bd/r", "TOPP-RA s/n", "eng max° o/c/g/a"
     );
     for r in rows {
         let (am, at) = match &r.adaptive {
@@ -609,7 +706,7 @@ pub fn format_table(rows: &[BenchRow]) -> String {
         );
         let _ = writeln!(
             s,
-            "{:<17} {:>5.1} {:>6.1} {:>5.2} {:>5.2} | {:>6.0} {:>6.2} | {:>7.0} {:>6.2} {:>11} | {:>6} {:>6} | {:>6.2} | {:>5.2} {:>7.0} {:>6.2} | {:>6.1} {:>6.1} {:>6.1} | {:>10} | {:>13}",
+            "{:<17} {:>5.1} {:>6.1} {:>5.2} {:>5.2} | {:>6.0} {:>6.2} | {:>7.0} {:>6.2} {:>11} | {:>6} {:>6} | {:>6.2} | {:>5.2} {:>7.0} {:>6.2} | {:>6.1} {:>6.1} {:>6.1} | {:>10} | {:>13} | {:>19}",
             r.pocket,
             r.l_over_d,
             r.size_mm,
@@ -633,7 +730,17 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             match (r.toppra_ratio, r.toppra_ratio_native) {
                 (Some(a), Some(b)) => format!("{a:.4}/{b:.4}"),
                 _ => "-".into(),
-            }
+            },
+            [
+                r.offset.max_engagement_deg,
+                r.curvilinear.max_engagement_deg,
+                r.offset_gap_matched.max_engagement_deg,
+                r.adaptive.as_ref().and_then(|a| a.max_engagement_deg),
+            ]
+            .iter()
+            .map(|e| e.map_or("-".into(), |e| format!("{e:.0}")))
+            .collect::<Vec<String>>()
+            .join("/")
         );
     }
     s

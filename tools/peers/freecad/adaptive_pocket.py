@@ -5,7 +5,10 @@ Usage: adaptive_pocket.py IN.json OUT.json
 
 IN.json:  {"outer": [[x, y], ...], "tool_diameter": D, "stepover": s, "finish_stepover": f}
 OUT.json: {"points": [[x, y], ...],        # tool-centre path, all moves in order, one polyline
-           "cutting_length": mm, "link_length": mm, "regions": n, "motion_types": [...]}
+           "cutting_length": mm, "link_length": mm, "regions": n, "motion_types": [...],
+           "helix_center": [x, y], "helix_radius": r}   # the first region's entry helix
+           (FreeCAD's PathAdaptive.py ramps down a helix about HelixCenterPoint through
+           StartPoint; it is not in "points")
 
 The library comes from Debian's libfreecad-python3-0.20, unpacked by setup.sh into
 $HOME/.cache/thinplan-freecad (override with THINPLAN_FREECAD). libarea-native.so is loaded
@@ -57,9 +60,16 @@ def main():
     results = a2d.Execute([stock], [outer], lambda paths: False)
     pts = []
     types = []
+    helix_center = None
+    helix_radius = None
     cut = 0.0
     link = 0.0
     for region in results:
+        if helix_center is None:
+            hc = region.HelixCenterPoint
+            sp = region.StartPoint
+            helix_center = [float(hc[0]), float(hc[1])]
+            helix_radius = math.dist(helix_center, (float(sp[0]), float(sp[1])))
         for mtype, path in region.AdaptivePaths:
             mt = int(mtype)
             seg = [(float(p[0]), float(p[1])) for p in path]
@@ -82,6 +92,8 @@ def main():
                 "link_length": link,
                 "regions": len(results),
                 "motion_types": sorted(set(types)),
+                "helix_center": helix_center,
+                "helix_radius": helix_radius,
             },
             fh,
         )
