@@ -5,7 +5,9 @@
 use std::time::Instant;
 
 use thinplan_pocketing::bench::{bench_family, bench_params, bench_pockets, BenchConfig};
-use thinplan_pocketing::engagement::{engagement_stats, EngagementParams, Entry};
+use thinplan_pocketing::engagement::{
+    engagement_profile, engagement_stats, EngagementParams, Entry,
+};
 use thinplan_pocketing::timing::{time_path, MachineLimits};
 use thinplan_pocketing::{
     curvilinear_path, offset_path, Pocket, PocketError, PocketParams, PocketPath,
@@ -107,9 +109,19 @@ fn cost(ld: f64) {
             let t2 = Instant::now();
             let e = engagement_stats(&path.points, params.tool_diameter, Entry::Plunge, &ep);
             let t3 = Instant::now();
+            // how much of the path cuts like a slot (≥ 150°), and how far along it ends
+            let prof = engagement_profile(&path.points, params.tool_diameter, Entry::Plunge, &ep);
+            let total = prof.last().map_or(1.0, |e| e.s);
+            let slotting: Vec<f64> = prof
+                .iter()
+                .filter(|e| e.angle_deg >= 150.0)
+                .map(|e| e.s)
+                .collect();
+            let share = slotting.len() as f64 / prof.len().max(1) as f64;
+            let last = slotting.last().map_or(0.0, |s| s / total);
             let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
             println!(
-                "{:<17} {:<12} {:>8.1} {:>8.1} {:>8.1}  ({:.0} mm = {:.0} D, max {:.0}°)",
+                "{:<17} {:<12} {:>8.1} {:>8.1} {:>8.1}  ({:.0} mm = {:.0} D, max {:.0}° at {:.3} of the length, p99 {:.0}°; ≥ 150° on {:.1} % of it, the last at {:.3})",
                 bp.pocket.name,
                 name,
                 ms(t0, t1),
@@ -117,7 +129,11 @@ fn cost(ld: f64) {
                 ms(t2, t3),
                 sched.length,
                 sched.length / params.tool_diameter,
-                e.map_or(f64::NAN, |e| e.max_engagement_deg)
+                e.map_or(f64::NAN, |e| e.max_engagement_deg),
+                e.map_or(f64::NAN, |e| e.max_at_fraction),
+                e.map_or(f64::NAN, |e| e.p99_engagement_deg),
+                100.0 * share,
+                last
             );
         }
     }
