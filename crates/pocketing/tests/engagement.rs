@@ -143,3 +143,18 @@ proptest! {
         prop_assert!((got - want).abs() <= TOL_DEG, "a/D {frac}: {got}° vs {want}°");
     }
 }
+
+/// Bench JSON written before the engagement fields still reads (they default to null).
+#[test]
+fn old_bench_json_without_engagement_still_reads() {
+    use thinplan_pocketing::bench::{CurvilinearStats, PathStats};
+    let p: PathStats =
+        serde_json::from_str(r#"{"length_mm": 1.0, "time_s": 2.0, "max_gap_mm": null}"#).unwrap();
+    assert_eq!(p.max_engagement_deg, None);
+    assert_eq!(p.max_radial_mm, None);
+    let c: CurvilinearStats = serde_json::from_str(
+        r#"{"length_mm": 1.0, "time_s": 2.0, "max_gap_mm": 0.5, "method": "curvilinear"}"#,
+    )
+    .unwrap();
+    assert_eq!(c.p99_engagement_deg, None);
+}
