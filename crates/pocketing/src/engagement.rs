@@ -4,7 +4,7 @@
 //! starts uncut everywhere (a closed pocket: the walls are stock too, so a path that strays
 //! past the offset boundary is charged for the wall it cuts). The material removed so far is
 //! the union of the capsules of radius R = D/2 about the path's segments (the exact swept
-//! area of a disc moving along a polyline), held in a uniform grid of buckets of side R (a
+//! area of a disc moving along a polyline), held in a uniform grid of buckets of side R/2 (a
 //! raster over the floor region; each bucket lists the capsules that reach into it).
 //!
 //! At each tool position `p` (every vertex of the path and points in between, at most
@@ -118,15 +118,21 @@ impl Buckets {
         (q.x.floor() as isize, q.y.floor() as isize)
     }
 
-    /// Add the capsule of radius `r` about `a`–`b`: listed in every bucket its box reaches.
+    /// Add the capsule of radius `r` about `a`–`b`: listed in every bucket it reaches (the
+    /// bucket's centre within r + half a diagonal of the segment).
     fn add(&mut self, a: DVec2, b: DVec2, r: f64) {
         let k = self.segs.len() as u32;
         self.segs.push((a, b));
         let (i0, j0) = self.index(a.min(b) - DVec2::splat(r));
         let (i1, j1) = self.index(a.max(b) + DVec2::splat(r));
+        let reach = r + self.cell * std::f64::consts::FRAC_1_SQRT_2;
+        let reach2 = reach * reach * (1.0 + 1e-9);
         for j in j0.max(0)..=j1.min(self.ny as isize - 1) {
             for i in i0.max(0)..=i1.min(self.nx as isize - 1) {
-                self.lists[j as usize * self.nx + i as usize].push(k);
+                let c = self.origin + (DVec2::new(i as f64, j as f64) + 0.5) * self.cell;
+                if dist2_point_seg(c, a, b) <= reach2 {
+                    self.lists[j as usize * self.nx + i as usize].push(k);
+                }
             }
         }
     }
@@ -208,7 +214,7 @@ pub fn engagement_profile(
         Entry::Helix { .. } => entry_caps.push((pts[0], pts[0])),
     }
     let pad = DVec2::splat(2.0 * r);
-    let mut grid = Buckets::new(lo - pad, hi + pad, r);
+    let mut grid = Buckets::new(lo - pad, hi + pad, 0.5 * r);
     for (a, b) in entry_caps {
         grid.add(a, b, r);
     }
