@@ -676,7 +676,8 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
 /// The rows as a fixed-width text table. `save %` columns: curvilinear time saving over the
 /// arc offset baseline (`offset`), the sharp-cornered one (`sharp`) and the gap-matched one
 /// (`gapm`, ring stepover `s'`); `turns/bd/rings`: spiral turns, their lower bound, offset rings;
-/// `eng max°`: max engagement angle of offset / curvilinear / gap-matched / Adaptive paths.
+/// `eng p99°`: 99th-percentile engagement angle of offset / curvilinear / gap-matched / Adaptive
+/// paths (their max, in the JSON, is 180° for every path of ours: the first move off the plunge).
 pub fn format_table(rows: &[BenchRow]) -> String {
     use std::fmt::Write;
     let mut s = String::new();
@@ -685,7 +686,7 @@ pub fn format_table(rows: &[BenchRow]) -> String {
         "{:<17} {:>5} {:>6} {:>5} {:>5} | {:>6} {:>6} | {:>7} {:>6} {:>11} | {:>6} {:>6} | {:>6} | {:>5} {:>7} {:>6} | {:>6} {:>6} {:>6} | {:>10} | {:>13} | {:>19}",
         "pocket", "L/D", "L mm", "tool", "step", "off mm", "off s", "curv mm", "curv s", "method",
         "adp mm", "adp s", "shrp s", "s'", "gapm mm", "gapm s", "save%", "sharp", "gapm",
-        "turns/bd/r", "TOPP-RA s/n", "eng max° o/c/g/a"
+        "turns/bd/r", "TOPP-RA s/n", "eng p99° o/c/g/a"
     );
     for r in rows {
         let (am, at) = match &r.adaptive {
@@ -732,10 +733,10 @@ pub fn format_table(rows: &[BenchRow]) -> String {
                 _ => "-".into(),
             },
             [
-                r.offset.max_engagement_deg,
-                r.curvilinear.max_engagement_deg,
-                r.offset_gap_matched.max_engagement_deg,
-                r.adaptive.as_ref().and_then(|a| a.max_engagement_deg),
+                r.offset.p99_engagement_deg,
+                r.curvilinear.p99_engagement_deg,
+                r.offset_gap_matched.p99_engagement_deg,
+                r.adaptive.as_ref().and_then(|a| a.p99_engagement_deg),
             ]
             .iter()
             .map(|e| e.map_or("-".into(), |e| format!("{e:.0}")))
