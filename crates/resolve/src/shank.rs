@@ -71,6 +71,14 @@ pub(crate) fn shank_access(
             if graph.reaches(n, f) {
                 continue;
             }
+            // F already comes first by this rule's own earlier constraints
+            // only (a shallower neighbour asked first): the reverse request
+            // is no news, and the operations keep the deeper feature's tool
+            // out of F instead. A refusal is recorded only where another
+            // rule stands in the way.
+            if graph.reaches(f, n) && !reaches_without(out, RULE_SHANK, f, n) {
+                continue;
+            }
             let mut p = Provenance::new(ProvenanceSource::Knowledge, RULE_SHANK)
                 .with_value("flute_length", t.flute_length)
                 .with_value("top_of_first", top(gn))
@@ -176,4 +184,26 @@ fn reach_zone(g: &Geo, open: &[([f64; 2], [f64; 2], [f64; 2])], slabs: &[Slab], 
 
 fn bbox(s: &Shapes) -> [f64; 4] {
     super::bbox_of(s)
+}
+
+/// Whether `from` comes before `to` through constraints of rules other
+/// than `rule`.
+fn reaches_without(out: &Resolution, rule: &str, from: usize, to: usize) -> bool {
+    let mut next: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+    for c in out.constraints.iter().filter(|c| c.provenance.rule != rule) {
+        next.entry(c.first.0 as usize)
+            .or_default()
+            .push(c.second.0 as usize);
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    let mut stack = vec![from];
+    while let Some(v) = stack.pop() {
+        if v == to {
+            return true;
+        }
+        if seen.insert(v) {
+            stack.extend(next.get(&v).into_iter().flatten().copied());
+        }
+    }
+    false
 }

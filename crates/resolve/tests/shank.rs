@@ -259,3 +259,52 @@ fn the_switch_turns_the_rule_off() {
         .all(|c| c.provenance.rule != RULE_SHANK));
     assert!(s.plan.refusals.iter().all(|r| r.rule != RULE_SHANK));
 }
+
+/// A shank request is refused and recorded only where another rule stands
+/// in the way (a chain of other rules' constraints puts the second first);
+/// where this rule's own earlier constraints already decided the pair, the
+/// request is dropped silently. Checked on every sample, independently of
+/// the graph inside resolve.
+#[test]
+fn shank_refusals_are_recorded_only_against_other_rules() {
+    let mut recorded = 0;
+    for name in samples() {
+        let s = planned(name);
+        let plan = &s.plan;
+        let n = plan.machining_features.len();
+        let mut others = vec![Vec::new(); n];
+        for c in &plan.machining_constraints {
+            if c.provenance.rule != RULE_SHANK {
+                others[c.first.0 as usize].push(c.second.0 as usize);
+            }
+        }
+        let by_others = |a: usize, b: usize| {
+            let mut seen = vec![false; n];
+            let mut stack = vec![a];
+            while let Some(v) = stack.pop() {
+                if v == b {
+                    return true;
+                }
+                for &w in &others[v] {
+                    if !seen[w] {
+                        seen[w] = true;
+                        stack.push(w);
+                    }
+                }
+            }
+            false
+        };
+        for r in plan.refusals.iter().filter(|r| r.rule == RULE_SHANK) {
+            let first = r.provenance.values["first"] as usize;
+            let second = r.provenance.values["second"] as usize;
+            assert!(
+                by_others(second, first),
+                "{name}: {} is recorded, but only this rule orders MF{second} before MF{first}",
+                r.reason
+            );
+            recorded += 1;
+        }
+    }
+    // The flange steps under web layers: the sequencing rule wins there.
+    assert!(recorded > 0, "no refusal on any sample");
+}
