@@ -13,6 +13,8 @@ use i_overlay::core::overlay_rule::OverlayRule;
 use i_overlay::float::single::SingleFloatOverlay;
 use thinplan_plan::{MachiningFeature, Plan, ProfileLoop};
 
+use crate::precedence::{bbox, same_frame};
+
 /// Shapes: each an outer contour then holes.
 pub(crate) type Shapes = Vec<Vec<Vec<[f64; 2]>>>;
 
@@ -37,29 +39,6 @@ fn region(f: &MachiningFeature) -> Vec<Vec<[f64; 2]>> {
     let mut c = vec![contour(&f.shape.region.outer)];
     c.extend(f.shape.region.holes.iter().map(contour));
     c
-}
-
-fn bbox(f: &MachiningFeature) -> [f64; 4] {
-    let mut b = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    for v in &f.shape.region.outer.vertices {
-        b[0] = b[0].min(v.x);
-        b[1] = b[1].min(v.y);
-        b[2] = b[2].max(v.x);
-        b[3] = b[3].max(v.y);
-    }
-    b
-}
-
-fn same_frame(a: &MachiningFeature, b: &MachiningFeature) -> bool {
-    let (fa, fb) = (&a.shape.frame, &b.shape.frame);
-    (fa.origin - fb.origin).length() < 1e-9
-        && (fa.x - fb.x).length() < 1e-9
-        && (fa.z - fb.z).length() < 1e-9
 }
 
 /// The free space around `plan.machining_features[i]` within `margin` of it:

@@ -46,7 +46,8 @@ pub fn machining_order(plan: &Plan) -> Vec<MachiningFeatureId> {
     order
 }
 
-fn bbox(f: &MachiningFeature) -> [f64; 4] {
+/// A feature's plan-view box (outer loop vertices; arcs as chords).
+pub(crate) fn bbox(f: &MachiningFeature) -> [f64; 4] {
     let mut b = [
         f64::INFINITY,
         f64::INFINITY,
@@ -62,6 +63,14 @@ fn bbox(f: &MachiningFeature) -> [f64; 4] {
     b
 }
 
+/// Whether two features share one frame (their plan-view coordinates compare).
+pub(crate) fn same_frame(a: &MachiningFeature, b: &MachiningFeature) -> bool {
+    let (fa, fb) = (&a.shape.frame, &b.shape.frame);
+    (fa.origin - fb.origin).length() < 1e-9
+        && (fa.x - fb.x).length() < 1e-9
+        && (fa.z - fb.z).length() < 1e-9
+}
+
 /// Whether `g` stands within `margin` of `f` in plan view (same frame) and
 /// higher than `rise` above `f`'s bottom: a shank may meet it.
 pub(crate) fn shank_neighbour(
@@ -70,11 +79,7 @@ pub(crate) fn shank_neighbour(
     margin: f64,
     rise: f64,
 ) -> bool {
-    let (fa, fb) = (&f.shape.frame, &g.shape.frame);
-    let same = (fa.origin - fb.origin).length() < 1e-9
-        && (fa.x - fb.x).length() < 1e-9
-        && (fa.z - fb.z).length() < 1e-9;
-    if !same || g.shape.z_max <= f.shape.z_min + rise {
+    if !same_frame(f, g) || g.shape.z_max <= f.shape.z_min + rise {
         return false;
     }
     let (a, b) = (bbox(f), bbox(g));

@@ -32,6 +32,8 @@
 //! the first move out of it.
 
 use glam::DVec2;
+
+use crate::geom::dist2_point_seg;
 use serde::{Deserialize, Serialize};
 
 /// Resolution of the measure.
@@ -151,17 +153,6 @@ impl Buckets {
                 dist2_point_seg(q, a, b) <= r2
             })
     }
-}
-
-fn dist2_point_seg(p: DVec2, a: DVec2, b: DVec2) -> f64 {
-    let ab = b - a;
-    let l2 = ab.length_squared();
-    let t = if l2 > 0.0 {
-        ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    p.distance_squared(a + ab * t)
 }
 
 /// Engagement at every measured position of `points` (see the module doc). Empty for a path

@@ -81,6 +81,12 @@ pub fn perimeter(pts: &[DVec2]) -> f64 {
 /// Distance from `p` to segment `a`–`b`.
 #[inline]
 pub fn dist_point_seg(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    dist2_point_seg(p, a, b).sqrt()
+}
+
+/// Squared distance from `p` to segment `a`–`b`.
+#[inline]
+pub fn dist2_point_seg(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     let ab = b - a;
     let l2 = ab.length_squared();
     let t = if l2 > 0.0 {
@@ -88,7 +94,7 @@ pub fn dist_point_seg(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     } else {
         0.0
     };
-    p.distance(a + ab * t)
+    p.distance_squared(a + ab * t)
 }
 
 /// Point-in-polygon (even-odd) for a closed loop.

@@ -88,9 +88,19 @@ fn distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
 }
 
 fn reaches(plan: &Plan, a: usize, b: usize) -> bool {
+    reaches_by(plan, a, b, |_| true)
+}
+
+/// Whether `a` comes before `b` through the constraints `keep` accepts.
+fn reaches_by(
+    plan: &Plan,
+    a: usize,
+    b: usize,
+    keep: impl Fn(&thinplan_plan::Constraint<thinplan_plan::MachiningFeatureId>) -> bool,
+) -> bool {
     let n = plan.machining_features.len();
     let mut succ = vec![Vec::new(); n];
-    for c in &plan.machining_constraints {
+    for c in plan.machining_constraints.iter().filter(|c| keep(c)) {
         succ[c.first.0 as usize].push(c.second.0 as usize);
     }
     let mut seen = vec![false; n];
@@ -271,29 +281,8 @@ fn shank_refusals_are_recorded_only_against_other_rules() {
     for name in samples() {
         let s = planned(name);
         let plan = &s.plan;
-        let n = plan.machining_features.len();
-        let mut others = vec![Vec::new(); n];
-        for c in &plan.machining_constraints {
-            if c.provenance.rule != RULE_SHANK {
-                others[c.first.0 as usize].push(c.second.0 as usize);
-            }
-        }
-        let by_others = |a: usize, b: usize| {
-            let mut seen = vec![false; n];
-            let mut stack = vec![a];
-            while let Some(v) = stack.pop() {
-                if v == b {
-                    return true;
-                }
-                for &w in &others[v] {
-                    if !seen[w] {
-                        seen[w] = true;
-                        stack.push(w);
-                    }
-                }
-            }
-            false
-        };
+        let by_others =
+            |a: usize, b: usize| reaches_by(plan, a, b, |c| c.provenance.rule != RULE_SHANK);
         for r in plan.refusals.iter().filter(|r| r.rule == RULE_SHANK) {
             let first = r.provenance.values["first"] as usize;
             let second = r.provenance.values["second"] as usize;
