@@ -35,7 +35,7 @@ fn contour(l: &ProfileLoop) -> Vec<[f64; 2]> {
     l.vertices.iter().map(|v| [v.x, v.y]).collect()
 }
 
-fn region(f: &MachiningFeature) -> Vec<Vec<[f64; 2]>> {
+pub(crate) fn region(f: &MachiningFeature) -> Vec<Vec<[f64; 2]>> {
     let mut c = vec![contour(&f.shape.region.outer)];
     c.extend(f.shape.region.holes.iter().map(contour));
     c
@@ -47,6 +47,25 @@ fn region(f: &MachiningFeature) -> Vec<Vec<[f64; 2]>> {
 /// `None` when the plan is not resolved (no blank recorded) or the features
 /// do not share one frame.
 pub(crate) fn free_space(plan: &Plan, i: usize, margin: f64) -> Option<Shapes> {
+    space(plan, i, margin, |_| true)
+}
+
+/// The space already cut around `plan.machining_features[i]` within `margin`
+/// of it when it is cut: outside the blank, the feature itself, and every
+/// feature before it in the machining order (the features stage 6 calls
+/// open across an edge), at every height of the feature.
+pub(crate) fn removed_space(plan: &Plan, i: usize, margin: f64) -> Option<Shapes> {
+    let order = crate::precedence::machining_order(plan);
+    let mut pos = vec![0usize; plan.machining_features.len()];
+    for (k, f) in order.iter().enumerate() {
+        pos[f.0 as usize] = k;
+    }
+    space(plan, i, margin, |j| pos[j] < pos[i])
+}
+
+/// The union of the feature, the features `include` admits and the air
+/// outside the blank, at every height of the feature.
+fn space(plan: &Plan, i: usize, margin: f64, include: impl Fn(usize) -> bool) -> Option<Shapes> {
     let blank = blank_rect(plan)?;
     let f = &plan.machining_features[i];
     let fb = bbox(f);
@@ -67,7 +86,7 @@ pub(crate) fn free_space(plan: &Plan, i: usize, margin: f64) -> Option<Shapes> {
         if !same_frame(f, g) {
             return None;
         }
-        if g.shape.z_max > lo + eps && g.shape.z_min < hi - eps {
+        if g.shape.z_max > lo + eps && g.shape.z_min < hi - eps && include(j) {
             others.push(g);
         }
     }
@@ -118,7 +137,7 @@ pub(crate) fn free_space(plan: &Plan, i: usize, margin: f64) -> Option<Shapes> {
 /// The shapes without zero-width slits and spikes: where two features'
 /// shared edges differ in the last bits the union keeps a crack that is no
 /// product, yet the safety net would keep the tool r from it.
-fn without_slits(shapes: Shapes) -> Shapes {
+pub(crate) fn without_slits(shapes: Shapes) -> Shapes {
     let tiny = 1e-6;
     let clean = |c: &Vec<[f64; 2]>| -> Vec<[f64; 2]> {
         let mut pts = c.clone();

@@ -104,6 +104,30 @@ impl Edge2 {
     }
 }
 
+/// Polygons covering every point within `reach` of each segment (capsules,
+/// circumscribed so that nothing within `reach` is left out).
+pub fn capsules(segments: impl Iterator<Item = (DVec2, DVec2)>, reach: f64) -> Vec<Vec<[f64; 2]>> {
+    const HALF: usize = 16;
+    let rho = reach / (std::f64::consts::PI / (2.0 * HALF as f64)).cos();
+    segments
+        .filter(|(a, b)| a.distance_squared(*b) > 1e-18)
+        .map(|(a, b)| {
+            let t = (b - a).normalize();
+            let a0 = t.perp().to_angle();
+            let mut c = Vec::with_capacity(2 * HALF + 2);
+            // Around b from +perp to -perp (clockwise side first), then a.
+            for (centre, start) in [(b, a0 - std::f64::consts::PI), (a, a0)] {
+                for k in 0..=HALF {
+                    let ang = start + std::f64::consts::PI * k as f64 / HALF as f64;
+                    let q = centre + DVec2::from_angle(ang) * rho;
+                    c.push([q.x, q.y]);
+                }
+            }
+            c
+        })
+        .collect()
+}
+
 pub fn dist_point_seg(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     let ab = b - a;
     let l2 = ab.length_squared();

@@ -73,6 +73,16 @@ pub(crate) const NO_TOOL_FITS: &str = "unreachable: no tool of the set-up's tool
 
 /// Sampling step (mm) for containment checks and polygons.
 const STEP: f64 = 0.25;
+/// Rest blocks shorter than this (mm) are points where a zigzag line only
+/// touches the tool-centre region.
+const MIN_BLOCK: f64 = 1e-3;
+
+/// A block the zigzag only touches (a rest region pinched to a point): it
+/// has no length to ramp along and cuts no more than the disc a
+/// neighbouring pass takes, so a level skips it where no entry fits.
+fn pinched(block: &[DVec2]) -> bool {
+    block.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>() < MIN_BLOCK
+}
 /// Distance slack for "on the product offset" (mm).
 const EPS: f64 = 1e-6;
 
@@ -139,6 +149,7 @@ fn geometry(
     m: &Method,
     tool: &Tool,
     free: Option<&crate::free::Shapes>,
+    removed: Option<&crate::free::Shapes>,
 ) -> Option<Geometry> {
     let d = tool.diameter;
     let r = d / 2.0;
@@ -217,7 +228,23 @@ fn geometry(
         return None;
     }
     if let Some(free) = clip {
-        let grown = grown_region(&edges, m, d);
+        use i_overlay::core::fill_rule::FillRule;
+        use i_overlay::core::overlay_rule::OverlayRule;
+        use i_overlay::float::single::SingleFloatOverlay;
+        let mut grown = grown_region(&edges, m, d, false);
+        if let Some(removed) = removed {
+            // An edge counts as open by its midpoint; past it the tool may
+            // overhang a whole diameter only into space already cut, and
+            // half of one into a feature still to come (where the far side
+            // of an open edge is partly such a feature).
+            let half = grown_region(&edges, m, d, true);
+            let far: crate::free::Shapes =
+                grown.overlay_as::<i64>(removed, OverlayRule::Intersect, FillRule::NonZero);
+            let far: Vec<Vec<[f64; 2]>> = far.into_iter().flatten().collect();
+            let both: crate::free::Shapes =
+                half.overlay_as::<i64>(&far, OverlayRule::Union, FillRule::NonZero);
+            grown = both.into_iter().flatten().collect();
+        }
         loops = clipped_to_free(&grown, free, &product_strips(&edges), d);
         if loops.is_empty() {
             return None;
@@ -274,26 +301,7 @@ fn away_from_product(polys: &[Vec<DVec2>], product: &[Edge2], reach: f64) -> Vec
         .iter()
         .map(|p| p.iter().map(|q| [q.x, q.y]).collect())
         .collect();
-    const HALF: usize = 16;
-    let rho = reach / (std::f64::consts::PI / (2.0 * HALF as f64)).cos();
-    let capsules: Vec<Vec<[f64; 2]>> = product
-        .iter()
-        .filter(|e| e.a.distance_squared(e.b) > 1e-18)
-        .map(|e| {
-            let t = (e.b - e.a).normalize();
-            let a0 = t.perp().to_angle();
-            let mut c = Vec::with_capacity(2 * HALF + 2);
-            // Around b from +perp to -perp (clockwise side first), then a.
-            for (centre, start) in [(e.b, a0 - std::f64::consts::PI), (e.a, a0)] {
-                for k in 0..=HALF {
-                    let ang = start + std::f64::consts::PI * k as f64 / HALF as f64;
-                    let q = centre + DVec2::from_angle(ang) * rho;
-                    c.push([q.x, q.y]);
-                }
-            }
-            c
-        })
-        .collect();
+    let capsules = crate::geom::capsules(product.iter().map(|e| (e.a, e.b)), reach);
     let out: crate::free::Shapes =
         subject.overlay_as::<i64>(&capsules, OverlayRule::Difference, FillRule::NonZero);
     out.into_iter()
@@ -310,7 +318,12 @@ fn away_from_product(polys: &[Vec<DVec2>], product: &[Edge2], reach: f64) -> Vec
 /// than itself from the open side (clipping to the free space and the
 /// product strips keep it off the product). Contours, all counter-clockwise
 /// except the region's holes.
-fn grown_region(edges: &[(Vec<Edge2>, Vec<Adjacency>)], m: &Method, d: f64) -> Vec<Vec<[f64; 2]>> {
+fn grown_region(
+    edges: &[(Vec<Edge2>, Vec<Adjacency>)],
+    m: &Method,
+    d: f64,
+    open_as_feature: bool,
+) -> Vec<Vec<[f64; 2]>> {
     use i_overlay::core::fill_rule::FillRule;
     use i_overlay::core::overlay_rule::OverlayRule;
     use i_overlay::float::single::SingleFloatOverlay;
@@ -325,8 +338,8 @@ fn grown_region(edges: &[(Vec<Edge2>, Vec<Adjacency>)], m: &Method, d: f64) -> V
     };
     let overhang = |a: Adjacency| match a {
         Adjacency::Product => 0.0,
-        Adjacency::Open => m.overhang.open * d,
-        Adjacency::Feature => m.overhang.feature * d,
+        Adjacency::Open if !open_as_feature => m.overhang.open * d,
+        Adjacency::Open | Adjacency::Feature => m.overhang.feature * d,
     };
     let region: Vec<Vec<[f64; 2]>> = edges
         .iter()
@@ -343,7 +356,8 @@ fn grown_region(edges: &[(Vec<Edge2>, Vec<Adjacency>)], m: &Method, d: f64) -> V
             }
             let t = (e.b - e.a).normalize();
             let nrm = DVec2::new(t.y, -t.x);
-            let open = adj[i] == Adjacency::Open;
+            // Running on past an end is for space already cut.
+            let open = adj[i] == Adjacency::Open && !open_as_feature;
             let prev = adj[(i + n - 1) % n];
             let next = adj[(i + 1) % n];
             let a = if open && prev == Adjacency::Product {
@@ -924,9 +938,10 @@ pub(crate) fn feature_operations(
     f: &MachiningFeature,
     env: &Env,
     free: Option<&crate::free::Shapes>,
+    removed: Option<&crate::free::Shapes>,
     obstacles: &[crate::free::Obstacle],
 ) -> Result<Made, String> {
-    let whole = plan_band(f, env, free)?;
+    let whole = plan_band(f, env, free, removed)?;
     let Some(free) = free else {
         return Ok(whole);
     };
@@ -977,7 +992,7 @@ pub(crate) fn feature_operations(
             .map(|(_, o)| *o)
             .collect();
         let made = if active.is_empty() {
-            match plan_band(&band, env, Some(free)) {
+            match plan_band(&band, env, Some(free), removed) {
                 Ok(m) => m,
                 Err(e) => return Ok(unbanded(whole, f, lo, hi, &e)),
             }
@@ -994,7 +1009,7 @@ pub(crate) fn feature_operations(
             walls_towards(&mut walled, &active);
             // Kept only if it cuts everything the overhanging plan cut in
             // this band (the band alone may find room yet reach less).
-            let lost = plan_band(&walled, env, Some(&clear)).and_then(|m| {
+            let lost = plan_band(&walled, env, Some(&clear), removed).and_then(|m| {
                 let lost = lost_area(&whole.ops, &m.ops, &band, r);
                 if lost > LOST_AREA {
                     Err(format!("{lost:.1} mm² of it out of reach"))
@@ -1014,7 +1029,7 @@ pub(crate) fn feature_operations(
                     m
                 }
                 Err(e) => {
-                    let mut m = match plan_band(&band, env, Some(free)) {
+                    let mut m = match plan_band(&band, env, Some(free), removed) {
                         Ok(m) => m,
                         Err(e) => return Ok(unbanded(whole, f, lo, hi, &e)),
                     };
@@ -1230,6 +1245,7 @@ fn plan_band(
     f: &MachiningFeature,
     env: &Env,
     free: Option<&crate::free::Shapes>,
+    removed: Option<&crate::free::Shapes>,
 ) -> Result<Made, String> {
     let mk = &env.k.methods;
     let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
@@ -1293,7 +1309,7 @@ fn plan_band(
     }
     let (tool, g) = cands
         .iter()
-        .find_map(|t| geometry(f, m, t, free).map(|g| (*t, g)))
+        .find_map(|t| geometry(f, m, t, free, removed).map(|g| (*t, g)))
         .ok_or_else(|| {
             let smallest = env
                 .tools
@@ -1558,7 +1574,8 @@ fn plan_band(
             } else {
                 Kind::Rest
             };
-            enter(
+            let mark = (main.moves.len(), main.pos);
+            if enter(
                 &mut main,
                 m.entry,
                 block,
@@ -1571,7 +1588,15 @@ fn plan_band(
                 mk.spindle,
                 entry_kind,
             )
-            .ok_or_else(|| format!("no room to ramp into z-level {z:.3}"))?;
+            .is_none()
+            {
+                if pinched(block) {
+                    main.moves.truncate(mark.0);
+                    main.pos = mark.1;
+                    continue;
+                }
+                return Err(format!("no room to ramp into z-level {z:.3}"));
+            }
             let segs = rounded(block, rho_c);
             if full_cut_always && bi == 0 && m.pattern.is_spiral() {
                 // The first orbit of a spiral cuts the full width.
@@ -1671,7 +1696,8 @@ fn plan_band(
                 continue;
             }
             go_to(&mut b, &mut started, &space, block[0], top);
-            enter(
+            let mark = (b.moves.len(), b.pos);
+            if enter(
                 &mut b,
                 m.entry,
                 block,
@@ -1684,7 +1710,15 @@ fn plan_band(
                 mk.spindle,
                 Kind::BottomFinish,
             )
-            .ok_or("no room to ramp into the bottom layer")?;
+            .is_none()
+            {
+                if pinched(block) {
+                    b.moves.truncate(mark.0);
+                    b.pos = mark.1;
+                    continue;
+                }
+                return Err("no room to ramp into the bottom layer".into());
+            }
             b.follow(&rounded(block, rho_c), z_min, Kind::BottomFinish);
         }
         boundary_level(
@@ -1720,6 +1754,7 @@ fn plan_band(
             m,
             env,
             free,
+            removed,
             tool,
             g: &g,
             z_min,
@@ -1820,6 +1855,7 @@ struct RestCtx<'a> {
     m: &'a Method,
     env: &'a Env<'a>,
     free: Option<&'a crate::free::Shapes>,
+    removed: Option<&'a crate::free::Shapes>,
     /// The feature's tool and its geometry.
     tool: &'a Tool,
     g: &'a Geometry,
@@ -1857,7 +1893,7 @@ fn rest_pass(c: &RestCtx, rp: &RestPass) -> Result<Option<LocalOp>, String> {
     });
     let Some((small, g2)) = cands
         .iter()
-        .find_map(|t| geometry(c.f, c.m, t, c.free).map(|g| (*t, g)))
+        .find_map(|t| geometry(c.f, c.m, t, c.free, c.removed).map(|g| (*t, g)))
     else {
         return Ok(None);
     };

@@ -19,6 +19,7 @@ mod layers;
 pub mod order;
 pub mod path;
 pub mod precedence;
+mod rest;
 
 use std::collections::BTreeMap;
 
@@ -153,6 +154,19 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         .iter()
         .map(|t| t.flute_length)
         .fold(f64::INFINITY, f64::min);
+    // How far a feature no tool fits alone may be reached from beside it:
+    // the smallest tool's diameter times the largest overhang the method
+    // knowledge allows beyond an open edge.
+    let rest_reach = tools
+        .tools
+        .iter()
+        .map(|t| t.diameter)
+        .fold(f64::INFINITY, f64::min)
+        * k.methods
+            .methods
+            .iter()
+            .map(|m| m.overhang.open)
+            .fold(0.0, f64::max);
     // The same edges stage 8 honours: what stands when a feature is cut.
     let shank_edges = precedence::shank_edges(plan, d_max, min_flute);
     // Features that get no operation, and every feature they cover from
@@ -184,19 +198,52 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
                 continue;
             }
             let free = free::free_space(plan, i, 2.0 * d_max);
+            let removed = free::removed_space(plan, i, 2.0 * d_max);
             let obstacles = free::shank_obstacles(plan, i, d_max, min_flute, &shank_edges);
             // A geometry library panicking on an awkward profile
             // (cavalier_contours asserts on some degenerate offsets) refuses
             // this feature, not the plan.
-            let attempt = |env: &layers::Env| {
+            let attempt_on = |f: &thinplan_plan::MachiningFeature, env: &layers::Env| {
                 std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    layers::feature_operations(f, env, free.as_ref(), &obstacles)
+                    layers::feature_operations(f, env, free.as_ref(), removed.as_ref(), &obstacles)
                 }))
                 .unwrap_or_else(|_| {
                     Err("the offset geometry failed on this profile (library panic)".into())
                 })
             };
+            let attempt = |env: &layers::Env| attempt_on(f, env);
             let mut m = attempt(&env);
+            // No tool fits its own region: reach it from the space cut
+            // beside it (a pocket corner between the walls' steps).
+            if matches!(&m, Err(e) if e.starts_with(layers::NO_TOOL_FITS)) {
+                let grown = free
+                    .as_ref()
+                    .zip(removed.as_ref())
+                    .and_then(|(free, removed)| {
+                        rest::reached_from_beside(f, free, removed, rest_reach)
+                    });
+                if let Some(g) = grown {
+                    if let Ok(mut made) = attempt_on(&g, &env) {
+                        let note = format!(
+                            "reached from the space cut beside it (region grown by up to \
+                             {rest_reach:.3} mm: {:.1} → {:.1} mm²)",
+                            layers::region_area(f),
+                            layers::region_area(&g)
+                        );
+                        for op in &mut made.ops {
+                            op.provenance.note.push_str(&format!("; {note}"));
+                            op.provenance
+                                .values
+                                .insert("rest_reach_mm".into(), rest_reach);
+                        }
+                        made.warnings.insert(
+                            0,
+                            format!("{}: no tool fits its region alone; {note}", f.id),
+                        );
+                        m = Ok(made);
+                    }
+                }
+            }
             // A path the safety net refused with one tool may pass with a
             // smaller one: retry without the largest tools, one at a time.
             let mut fewer = tools.clone();

@@ -22,16 +22,15 @@ pub enum OrderError {
 }
 
 /// Stage 8: a topological order of the plan's operations. Besides the
-/// machining constraints it honours the shank edges (`precedence.rs`): a
-/// taller neighbour that stage 7 took as removed runs first.
+/// machining constraints it honours the edges of `precedence.rs`: a taller
+/// neighbour that stage 7 took as removed runs first (shank), and so does
+/// every earlier feature an operation cuts into (stage 7 let the tool
+/// overhang an open edge by a whole diameter).
 pub fn order(plan: &Plan, k: &Knowledge) -> Result<Vec<OperationId>, OrderError> {
     if !plan.stages_done.contains(&Stage::Operations) {
         return Err(OrderError::MissingStage(Stage::Operations));
     }
-    let edges = crate::precedence::reach_and_rise(plan, k)
-        .map(|(d, rise)| crate::precedence::shank_edges(plan, d, rise))
-        .unwrap_or_default();
-    order_with_edges(plan, &edges)
+    order_with_edges(plan, &crate::precedence::stage8_edges(plan, k))
 }
 
 /// Fills `plan.operation_order` and records stage 8.

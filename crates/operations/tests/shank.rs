@@ -35,14 +35,7 @@ fn beside(split: f64) -> Plan {
         (0.0, 40.0),
     );
     let mut plan = plan_with(vec![f, n]);
-    for (k, x) in [
-        ("resolve.blank_min_x", 0.0),
-        ("resolve.blank_min_y", 0.0),
-        ("resolve.blank_max_x", 100.0),
-        ("resolve.blank_max_y", 70.0),
-    ] {
-        plan.notes.insert(k.into(), x.to_string());
-    }
+    with_blank(&mut plan, [0.0, 0.0, 100.0, 70.0]);
     plan
 }
 

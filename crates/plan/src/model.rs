@@ -206,6 +206,22 @@ pub struct ProfileLoop {
     pub vertices: Vec<ProfileVertex>,
 }
 
+impl ProfileLoop {
+    /// A loop of straight edges through `points`, in order.
+    pub fn polygon(points: &[[f64; 2]]) -> Self {
+        ProfileLoop {
+            vertices: points
+                .iter()
+                .map(|p| ProfileVertex {
+                    x: p[0],
+                    y: p[1],
+                    bulge: 0.0,
+                })
+                .collect(),
+        }
+    }
+}
+
 /// A planar region: one outer loop (counter-clockwise) and holes (clockwise).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -24,7 +24,7 @@ use thinplan_brep::{Brep, Frame};
 use thinplan_knowledge::{FeatureSelector, Knowledge, RemainingOwner, TieBreak};
 use thinplan_plan::{
     Adjacency, Constraint, ConstraintKind, MachiningFeature, MachiningFeatureId, Plan, Prism,
-    PrismFrame, ProfileLoop, ProfileVertex, Provenance, ProvenanceSource, Refusal, Region, Stage,
+    PrismFrame, ProfileLoop, Provenance, ProvenanceSource, Refusal, Region, Stage,
     StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
 };
 
@@ -519,16 +519,7 @@ fn overlaps(a: &[f64; 4], b: &[f64; 4]) -> bool {
 
 /// A prism in the set-up frame from a plan-view shape (outer contour, then holes).
 fn prism(frame: &Frame, shape: &[Vec<[f64; 2]>], lo: f64, hi: f64) -> Prism {
-    let lp = |contour: &Vec<[f64; 2]>| ProfileLoop {
-        vertices: contour
-            .iter()
-            .map(|p| ProfileVertex {
-                x: p[0],
-                y: p[1],
-                bulge: 0.0,
-            })
-            .collect(),
-    };
+    let lp = |contour: &Vec<[f64; 2]>| ProfileLoop::polygon(contour);
     Prism {
         frame: PrismFrame {
             origin: frame.origin,

@@ -41,6 +41,18 @@ pub fn plan_with(features: Vec<MachiningFeature>) -> Plan {
     plan
 }
 
+/// Records the blank's plan-view box as stage 6 does.
+pub fn with_blank(plan: &mut Plan, b: [f64; 4]) {
+    for (k, x) in [
+        ("resolve.blank_min_x", b[0]),
+        ("resolve.blank_min_y", b[1]),
+        ("resolve.blank_max_x", b[2]),
+        ("resolve.blank_max_y", b[3]),
+    ] {
+        plan.notes.insert(k.into(), x.to_string());
+    }
+}
+
 pub fn v(x: f64, y: f64) -> ProfileVertex {
     ProfileVertex { x, y, bulge: 0.0 }
 }
