@@ -1,6 +1,7 @@
 //! Engagement of our paths and FreeCAD Adaptive's over a reduced bench sweep, as a Markdown
 //! table: `cargo run --release -p thinplan-pocketing --example engagement_sweep -- [L/D ...]`
-//! (default 1 4 10; TOPP-RA off). With `--cost`: the measure's run time per path beside the
+//! (default 1 4 10; TOPP-RA off). Our spiral is measured twice: entered by stage 7's helix
+//! (the planner's entry, `bench::HelixEntryRule`) and by a plunge at its first point. With `--cost`: the measure's run time per path beside the
 //! path generation and the feed schedule, at the first L/D.
 use std::time::Instant;
 
@@ -27,8 +28,13 @@ fn main() {
         l_over_d: lds,
         toppra: None,
         adaptive_max_l_over_d: 10.0,
+        compare_plunge: true,
         ..BenchConfig::default()
     };
+    match &cfg.helix_entry {
+        Some(h) => eprintln!("helix entry {} D from {}", h.radius, h.source),
+        None => eprintln!("note: no helix entry in the knowledge: our spiral plunges"),
+    }
     if cfg.adaptive.is_none() {
         eprintln!("note: FreeCAD Adaptive peer not installed: its columns are `-`");
     }
@@ -43,13 +49,27 @@ fn main() {
         let d = r.tool_mm;
         let c = &r.curvilinear;
         let mut lines = vec![(
-            format!("ours ({})", c.method),
+            format!(
+                "ours ({}, {})",
+                c.method,
+                c.entry.as_deref().unwrap_or("plunge")
+            ),
             Some(c.length_mm),
             Some(c.time_s),
             c.max_engagement_deg,
             c.p99_engagement_deg,
             c.max_radial_mm,
         )];
+        if let Some(p) = &c.plunge {
+            lines.push((
+                format!("ours ({}, plunge)", c.method),
+                Some(c.length_mm),
+                Some(c.time_s),
+                Some(p.max_engagement_deg),
+                Some(p.p99_engagement_deg),
+                Some(p.max_radial_mm),
+            ));
+        }
         for (name, p) in [
             ("offset", Some(&r.offset)),
             ("gap-matched offset", Some(&r.offset_gap_matched)),

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 use crate::engagement::{engagement_stats, EngagementParams, EngagementStats, Entry};
-use crate::geom::sample_pline;
+use crate::geom::{point_in_loop, sample_pline, SegIndex};
 use crate::timing::{time_path, MachineLimits};
 use crate::{
     curvilinear_path, offset_path, offset_path_gap_matched, offset_path_sharp, Pocket, PocketError,
@@ -409,6 +409,85 @@ pub fn toppra_ratios(
         .collect())
 }
 
+/// The scales stage 7 tries the helix radius at, largest first (`operations::layers::enter`).
+pub const HELIX_SCALES: [f64; 3] = [1.0, 0.5, 0.25];
+
+/// How the planner enters a spiral's first block (stage 7, `operations::layers::enter`): a
+/// helix of radius ρ = `radius` × D × scale ending at the path's first point p0, centred at
+/// p0 − (ρ, 0), for the first scale in [`HELIX_SCALES`] at which the circle fits in the
+/// tool-centre region; a plunge (a ramp in the planner) where none fits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HelixEntryRule {
+    /// Helix radius (tool-centre path), fraction of D.
+    pub radius: f64,
+    /// Where `radius` was read (provenance).
+    pub source: String,
+}
+
+/// How a path entered the stock: what the engagement measure clears first, and its label for
+/// the JSON rows (`"plunge"`, `"helix r=0.40D"`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PathEntry {
+    pub entry: Entry,
+    pub label: String,
+}
+
+impl PathEntry {
+    pub fn plunge() -> Self {
+        PathEntry {
+            entry: Entry::Plunge,
+            label: "plunge".into(),
+        }
+    }
+}
+
+impl HelixEntryRule {
+    /// The helix of the built-in knowledge's closed-pocket method (`knowledge/methods.ron`);
+    /// `None` when that method enters by a ramp (or the built-in knowledge does not load).
+    pub fn builtin() -> Option<Self> {
+        let k = thinplan_knowledge::Knowledge::builtin().ok()?;
+        // a closed pocket: every side is product; the bench's floors are not
+        let m = k
+            .methods
+            .for_feature(false, thinplan_knowledge::SidesMatch::Closed)?;
+        match m.entry {
+            thinplan_knowledge::LevelEntry::Helix { radius, .. } => Some(HelixEntryRule {
+                radius,
+                source: format!("builtin:knowledge/methods.ron, method `{}`", m.id),
+            }),
+            thinplan_knowledge::LevelEntry::Ramp { .. } => None,
+        }
+    }
+
+    /// Stage 7's entry for a path that starts at `p0` in the tool-centre region bounded by the
+    /// closed loop `boundary` (∂Ω), tool diameter `tool`: the helix at the first scale whose
+    /// centre lies inside ∂Ω at least ρ from it, else a plunge.
+    pub fn entry(&self, p0: DVec2, boundary: &[DVec2], tool: f64) -> PathEntry {
+        if boundary.len() < 3 || !(self.radius.is_finite() && self.radius > 0.0) {
+            return PathEntry::plunge();
+        }
+        let idx = SegIndex::new(&[boundary], true);
+        for s in HELIX_SCALES {
+            let rho = self.radius * tool * s;
+            let c = p0 - DVec2::new(rho, 0.0);
+            // the same margin as stage 7
+            if point_in_loop(c, boundary) && idx.nearest(c) >= rho + 1e-6 {
+                return PathEntry {
+                    entry: Entry::Helix {
+                        center: c,
+                        radius: rho,
+                    },
+                    label: format!("helix r={:.2}D", self.radius * s),
+                };
+            }
+        }
+        PathEntry {
+            entry: Entry::Plunge,
+            label: "plunge (no helix fits)".into(),
+        }
+    }
+}
+
 /// Benchmark configuration.
 #[derive(Debug, Clone)]
 pub struct BenchConfig {
@@ -433,6 +512,13 @@ pub struct BenchConfig {
     /// Measure the engagement of every path ([`crate::engagement`]); `None` = skip (the
     /// engagement fields are then null).
     pub engagement: Option<EngagementParams>,
+    /// How the curvilinear path (whichever spiral was kept) enters, for the engagement measure:
+    /// stage 7's helix ([`HelixEntryRule::builtin`]); `None` = a plunge at its first point. The
+    /// offset baselines always plunge.
+    pub helix_entry: Option<HelixEntryRule>,
+    /// Also measure the curvilinear path with a plunge (fills `curvilinear.plunge`), to compare
+    /// the two entries on the same path.
+    pub compare_plunge: bool,
 }
 
 impl Default for BenchConfig {
@@ -448,6 +534,8 @@ impl Default for BenchConfig {
             field: crate::Field::Poisson,
             distance_blend: 0.0,
             engagement: Some(EngagementParams::default()),
+            helix_entry: HelixEntryRule::builtin(),
+            compare_plunge: false,
         }
     }
 }
@@ -480,10 +568,18 @@ pub struct PathStats {
     pub p99_engagement_deg: Option<f64>,
     #[serde(default)]
     pub max_radial_mm: Option<f64>,
+    /// The entry the engagement was measured with ([`PathEntry::label`]); null in older JSON.
+    #[serde(default)]
+    pub entry: Option<String>,
 }
 
 impl PathStats {
-    fn new(t: &crate::timing::Schedule, max_gap: Option<f64>, e: Option<EngagementStats>) -> Self {
+    fn new(
+        t: &crate::timing::Schedule,
+        max_gap: Option<f64>,
+        e: Option<EngagementStats>,
+        entry: &str,
+    ) -> Self {
         PathStats {
             length_mm: t.length,
             time_s: t.total_time,
@@ -491,6 +587,7 @@ impl PathStats {
             max_engagement_deg: e.map(|e| e.max_engagement_deg),
             p99_engagement_deg: e.map(|e| e.p99_engagement_deg),
             max_radial_mm: e.map(|e| e.max_radial_mm),
+            entry: Some(entry.to_string()),
         }
     }
 }
@@ -514,6 +611,14 @@ pub struct CurvilinearStats {
     pub p99_engagement_deg: Option<f64>,
     #[serde(default)]
     pub max_radial_mm: Option<f64>,
+    /// The entry the engagement was measured with: stage 7's helix (`"helix r=0.40D"`) or
+    /// `"plunge"`; null in older JSON (measured with a plunge).
+    #[serde(default)]
+    pub entry: Option<String>,
+    /// The same path measured with a plunge at its first point
+    /// ([`BenchConfig::compare_plunge`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plunge: Option<EngagementStats>,
 }
 
 /// One benchmark row.
@@ -590,16 +695,26 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
             let t_sharp = time_path(&sharp.points, feed, &cfg.limits);
             let t_matched = time_path(&matched.points, feed, &cfg.limits);
             let tool = params.tool_diameter;
-            // our paths plunge at their first point
             let eng = |pts: &[DVec2], entry: Entry| {
                 cfg.engagement
                     .as_ref()
                     .and_then(|ep| engagement_stats(pts, tool, entry, ep))
             };
+            // the offset baselines plunge at their first point
             let stats = |t: &crate::timing::Schedule, p: &crate::PocketPath| {
-                PathStats::new(t, Some(p.max_gap), eng(&p.points, Entry::Plunge))
+                PathStats::new(t, Some(p.max_gap), eng(&p.points, Entry::Plunge), "plunge")
             };
-            let e_cur = eng(&cur.points, Entry::Plunge);
+            // the spiral enters as stage 7 would enter it
+            let cur_entry = match (&cfg.helix_entry, cur.points.first()) {
+                (Some(rule), Some(&p0)) => rule.entry(p0, &cur.boundary, tool),
+                _ => PathEntry::plunge(),
+            };
+            let e_cur = eng(&cur.points, cur_entry.entry);
+            let e_cur_plunge = if cfg.compare_plunge {
+                eng(&cur.points, Entry::Plunge)
+            } else {
+                None
+            };
             let adaptive = cfg
                 .adaptive
                 .as_ref()
@@ -620,7 +735,11 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                         );
                     }
                     let t = time_path(&ap.points, feed, &cfg.limits);
-                    PathStats::new(&t, None, eng(&ap.points, ap.entry()))
+                    let entry = match ap.helix {
+                        Some((_, r)) => format!("helix r={:.2}D", r / tool),
+                        None => "plunge".into(),
+                    };
+                    PathStats::new(&t, None, eng(&ap.points, ap.entry()), &entry)
                 })
             });
             if cfg.toppra.is_some() {
@@ -642,6 +761,8 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                     max_engagement_deg: e_cur.map(|e| e.max_engagement_deg),
                     p99_engagement_deg: e_cur.map(|e| e.p99_engagement_deg),
                     max_radial_mm: e_cur.map(|e| e.max_radial_mm),
+                    entry: Some(cur_entry.label.clone()),
+                    plunge: e_cur_plunge,
                 },
                 adaptive,
                 saving_pct: 100.0 * (1.0 - t_cur.total_time / t_off.total_time),
@@ -677,7 +798,8 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
 /// arc offset baseline (`offset`), the sharp-cornered one (`sharp`) and the gap-matched one
 /// (`gapm`, ring stepover `s'`); `turns/bd/rings`: spiral turns, their lower bound, offset rings;
 /// `eng p99°`: 99th-percentile engagement angle of offset / curvilinear / gap-matched / Adaptive
-/// paths (their max, in the JSON, is 180° for every path of ours: the first move off the plunge).
+/// paths (their max is in the JSON; the curvilinear path is measured with stage 7's helix entry,
+/// the offset baselines with a plunge, whose first move is a 180° slot).
 pub fn format_table(rows: &[BenchRow]) -> String {
     use std::fmt::Write;
     let mut s = String::new();

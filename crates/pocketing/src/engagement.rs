@@ -28,8 +28,8 @@
 //! **Entry.** Where the tool enters, the whole disc is uncut (a plunge, helix or ramp: 360°,
 //! not informative). The entry is excluded by clearing it before the replay: a disc of radius
 //! R at the first point (a plunge) or, for a path that starts with a helix (FreeCAD
-//! Adaptive), a disc of radius r_helix + R about the helix centre; positions are measured from
-//! the first move out of it.
+//! Adaptive; our spirals as stage 7 enters them), the exact disc of radius r_helix + R about
+//! the helix centre; positions are measured from the first move out of it.
 
 use glam::DVec2;
 
@@ -170,45 +170,27 @@ pub fn engagement_profile(
     let r = tool_diameter / 2.0;
     let step = (params.step.max(1e-4) * tool_diameter).max(1e-9);
     let probes = params.probes.max(2);
-    let mut lo = pts
+    let lo = pts
         .iter()
         .fold(DVec2::splat(f64::INFINITY), |a, p| a.min(*p));
-    let mut hi = pts
+    let hi = pts
         .iter()
         .fold(DVec2::splat(f64::NEG_INFINITY), |a, p| a.max(*p));
-    // the removed material is held as capsules of one radius: an entry disc of radius ρ > R
-    // is a ring of capsules of radius R covering it
-    let mut entry_caps: Vec<(DVec2, DVec2)> = Vec::new();
-    match entry {
-        Entry::Plunge => entry_caps.push((pts[0], pts[0])),
+    // the plunge's disc is a capsule of the tool's radius; a helix hole is held as an exact
+    // disc (a ring of chords would leave a sagitta of stock at its edge, which a tool running
+    // inside the hole along its rim would read as a few degrees of engagement)
+    let hole = match entry {
         Entry::Helix { center, radius } if radius.is_finite() && radius > 0.0 => {
-            // concentric circles of radius ≤ ρ − R spaced ≤ R, chords short enough that the
-            // capsules about them cover the disc of radius ρ + R
-            let mut rho = radius;
-            loop {
-                let n = ((std::f64::consts::TAU * rho) / (0.25 * r)).ceil().max(8.0) as usize;
-                let ring: Vec<DVec2> = (0..=n)
-                    .map(|i| {
-                        center
-                            + rho * DVec2::from_angle(std::f64::consts::TAU * i as f64 / n as f64)
-                    })
-                    .collect();
-                entry_caps.extend(ring.windows(2).map(|w| (w[0], w[1])));
-                if rho <= 0.0 {
-                    break;
-                }
-                rho = (rho - r).max(0.0);
-            }
-            lo = lo.min(center - DVec2::splat(radius));
-            hi = hi.max(center + DVec2::splat(radius));
+            Some((center, (radius + r) * (radius + r) * (1.0 + 1e-9)))
         }
-        Entry::Helix { .. } => entry_caps.push((pts[0], pts[0])),
-    }
+        _ => None,
+    };
     let pad = DVec2::splat(2.0 * r);
     let mut grid = Buckets::new(lo - pad, hi + pad, 0.5 * r);
-    for (a, b) in entry_caps {
-        grid.add(a, b, r);
+    if hole.is_none() {
+        grid.add(pts[0], pts[0], r);
     }
+    let in_hole = |q: DVec2| hole.is_some_and(|(c, h2)| q.distance_squared(c) <= h2);
     let r2 = r * r * (1.0 + 1e-9);
     let dth = std::f64::consts::PI / probes as f64;
     let mut out = Vec::new();
@@ -231,7 +213,7 @@ pub fn engagement_profile(
                 let th = -std::f64::consts::FRAC_PI_2 + (i as f64 + 0.5) * dth;
                 let (sn, cs) = th.sin_cos();
                 let q = p + r * (cs * t + sn * nrm);
-                if !grid.cut(q, r2) {
+                if !in_hole(q) && !grid.cut(q, r2) {
                     count += 1;
                     let across = r * sn;
                     lo_n = lo_n.min(across);

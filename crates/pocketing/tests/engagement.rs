@@ -5,7 +5,7 @@
 use glam::DVec2;
 use proptest::prelude::*;
 use thinplan_pocketing::engagement::{
-    engagement_profile, engagement_stats, EngagementParams, Entry,
+    engagement_profile, engagement_stats, summarize, EngagementParams, Entry,
 };
 
 /// Angle resolution of the default measure (180° / 360 probes) plus rounding.
@@ -157,4 +157,165 @@ fn old_bench_json_without_engagement_still_reads() {
     )
     .unwrap();
     assert_eq!(c.p99_engagement_deg, None);
+}
+
+/// Bench JSON written before the entry fields still reads (measured with a plunge then).
+#[test]
+fn old_bench_json_without_entry_still_reads() {
+    use thinplan_pocketing::bench::{CurvilinearStats, PathStats};
+    let p: PathStats = serde_json::from_str(
+        r#"{"length_mm": 1.0, "time_s": 2.0, "max_gap_mm": null, "max_engagement_deg": 180.0}"#,
+    )
+    .unwrap();
+    assert_eq!(p.entry, None);
+    let c: CurvilinearStats = serde_json::from_str(
+        r#"{"length_mm": 1.0, "time_s": 2.0, "max_gap_mm": 0.5, "method": "curvilinear"}"#,
+    )
+    .unwrap();
+    assert_eq!(c.entry, None);
+    assert!(c.plunge.is_none());
+}
+
+/// The bench reads the helix radius of the built-in closed-pocket method, as stage 7 does.
+#[test]
+fn helix_rule_comes_from_the_closed_pocket_method() {
+    use thinplan_pocketing::bench::{BenchConfig, HelixEntryRule};
+    let rule = HelixEntryRule::builtin().expect("the closed-pocket method enters by a helix");
+    assert!(rule.radius > 0.0 && rule.radius <= 1.0, "{rule:?}");
+    assert!(rule.source.contains("closed_pocket"), "{rule:?}");
+    assert_eq!(BenchConfig::default().helix_entry, Some(rule));
+}
+
+/// Stage 7's fit rule on a circular ∂Ω of radius `b` about the origin, the path starting at the
+/// origin: the helix circle about (−ρ, 0) fits when b ≥ 2ρ, tried at ρ, ρ/2, ρ/4.
+#[test]
+fn helix_entry_shrinks_until_it_fits_then_plunges() {
+    use thinplan_pocketing::bench::HelixEntryRule;
+    let d = 10.0;
+    let rule = HelixEntryRule {
+        radius: 0.4,
+        source: "test".into(),
+    };
+    let circle = |b: f64| -> Vec<DVec2> {
+        (0..720)
+            .map(|i| b * DVec2::from_angle(std::f64::consts::TAU * i as f64 / 720.0))
+            .collect()
+    };
+    // (∂Ω radius, expected helix radius or None for a plunge)
+    for (b, want) in [
+        (20.0, Some(4.0)),
+        (8.05, Some(4.0)),
+        (7.9, Some(2.0)),
+        (4.05, Some(2.0)),
+        (3.9, Some(1.0)),
+        (1.9, None),
+    ] {
+        let e = rule.entry(DVec2::ZERO, &circle(b), d);
+        match (e.entry, want) {
+            (Entry::Helix { center, radius }, Some(r)) => {
+                assert!((radius - r).abs() < 1e-12, "b = {b}: {e:?}");
+                assert!(
+                    (center - DVec2::new(-r, 0.0)).length() < 1e-12,
+                    "b = {b}: {e:?}"
+                );
+                assert_eq!(e.label, format!("helix r={:.2}D", r / d));
+                // the helix circle stays inside ∂Ω
+                assert!(center.length() + radius <= b, "b = {b}: {e:?}");
+            }
+            (Entry::Plunge, None) => assert!(e.label.starts_with("plunge"), "{e:?}"),
+            _ => panic!("b = {b}: {e:?}, expected {want:?}"),
+        }
+    }
+    // no boundary at all: a plunge, no panic
+    assert_eq!(rule.entry(DVec2::ZERO, &[], d).entry, Entry::Plunge);
+}
+
+/// The curvilinear spiral of a bench pocket (tool = width / 6) and its first orbit's largest
+/// distance from the spiral's centre: the points until the winding angle about the centre
+/// reaches a full turn, counted here independently of the generator.
+fn spiral_and_first_orbit(name: &str) -> (thinplan_pocketing::PocketPath, f64, f64) {
+    use thinplan_pocketing::bench::{bench_family, bench_params};
+    let bp = bench_family(60.0)
+        .into_iter()
+        .find(|b| b.pocket.name == name)
+        .unwrap();
+    let mut params = bench_params(&bp);
+    params.mesh_size = Some(params.stepover / 2.0);
+    let path = thinplan_pocketing::curvilinear_path(&bp.pocket, &params).unwrap();
+    assert_eq!(
+        path.method,
+        thinplan_pocketing::Method::Curvilinear,
+        "{name}"
+    );
+    let c = path.center.unwrap();
+    let (mut acc, mut r1) = (0.0, 0.0f64);
+    for w in path.points.windows(2) {
+        let (a, b) = (w[0] - c, w[1] - c);
+        if a.length() > 1e-9 && b.length() > 1e-9 {
+            acc += a.perp_dot(b).atan2(a.dot(b));
+        }
+        if acc.abs() > std::f64::consts::TAU {
+            break;
+        }
+        r1 = r1.max(b.length());
+    }
+    // the first contour is within the stepover of every point inside it, so its farthest
+    // point lies at about a stepover (beyond it where the contour is not round)
+    assert!(
+        r1 > 0.5 * params.stepover && r1 < params.tool_diameter,
+        "{name}: r1 {r1}"
+    );
+    (path, params.tool_diameter, r1)
+}
+
+/// A spiral that plunges at its centre starts with a slot (180°); entered by a helix about its
+/// centre of radius ≥ its first orbit's, the first orbit is inside the helix hole and every
+/// later position cuts beside material already removed: never 180°. Stage 7's helix (radius
+/// from the knowledge, centred beside the first point) also removes the 180° start.
+#[test]
+fn helix_entry_removes_the_spirals_slot_start() {
+    use thinplan_pocketing::bench::HelixEntryRule;
+    let ep = EngagementParams {
+        step: 1.0 / 20.0,
+        probes: 180,
+    };
+    for name in ["circle", "pentagon"] {
+        let (path, d, r1) = spiral_and_first_orbit(name);
+        let plunge = engagement_stats(&path.points, d, Entry::Plunge, &ep).unwrap();
+        assert!(
+            plunge.max_engagement_deg >= 180.0 - 1.0,
+            "{name}: plunge {plunge:?}"
+        );
+        let centred = Entry::Helix {
+            center: path.center.unwrap(),
+            radius: r1,
+        };
+        let prof = engagement_profile(&path.points, d, centred, &ep);
+        // the first orbit lies inside the helix hole: it cuts nothing
+        let c = path.center.unwrap();
+        let inside: Vec<_> = prof
+            .iter()
+            .filter(|e| e.position.distance(c) <= r1)
+            .collect();
+        assert!(inside.len() > 20, "{name}: {} positions", inside.len());
+        for e in inside {
+            assert_eq!(e.angle_deg, 0.0, "{name}: {e:?}");
+        }
+        // measured: circle 95°, pentagon 113° (at a corner, 0.69 of the way along)
+        let helix = summarize(&prof).unwrap();
+        assert!(
+            helix.max_engagement_deg < 120.0,
+            "{name}: helix r = {r1} ({} D): {helix:?}",
+            r1 / d
+        );
+        let rule = HelixEntryRule::builtin().unwrap();
+        let e = rule.entry(path.points[0], &path.boundary, d);
+        assert!(matches!(e.entry, Entry::Helix { .. }), "{name}: {e:?}");
+        let stage7 = engagement_stats(&path.points, d, e.entry, &ep).unwrap();
+        assert!(
+            stage7.max_engagement_deg < 135.0,
+            "{name}: {}: {stage7:?}",
+            e.label
+        );
+    }
 }
