@@ -1,8 +1,10 @@
 //! Engagement of our paths and FreeCAD Adaptive's over a reduced bench sweep, as a Markdown
 //! table: `cargo run --release -p thinplan-pocketing --example engagement_sweep -- [L/D ...]`
-//! (default 1 4 10; TOPP-RA off). Our spiral is measured twice: entered by stage 7's helix
-//! (the planner's entry, `bench::HelixEntryRule`) and by a plunge at its first point. With `--cost`: the measure's run time per path beside the
-//! path generation and the feed schedule, at the first L/D.
+//! (default 1 4 10; TOPP-RA off). Our spiral is measured three ways: entered by stage 7's
+//! helix (the planner's entry, `bench::HelixEntryRule`), by a plunge at its first point, and by
+//! a helix about its centre with the spiral started where it leaves the helix circle
+//! (`PocketPath::after_centred_helix`: its own length and time). With `--cost`: the measure's
+//! run time per path beside the path generation and the feed schedule, at the first L/D.
 use std::time::Instant;
 
 use thinplan_pocketing::bench::{bench_family, bench_params, bench_pockets, BenchConfig};
@@ -28,7 +30,7 @@ fn main() {
         l_over_d: lds,
         toppra: None,
         adaptive_max_l_over_d: 10.0,
-        compare_plunge: true,
+        compare_entries: true,
         ..BenchConfig::default()
     };
     match &cfg.helix_entry {
@@ -60,6 +62,20 @@ fn main() {
             c.p99_engagement_deg,
             c.max_radial_mm,
         )];
+        if let Some(p) = &c.centred_helix {
+            lines.push((
+                format!(
+                    "ours ({}, {}, started outside it)",
+                    c.method,
+                    p.entry.as_deref().unwrap_or("?")
+                ),
+                Some(p.length_mm),
+                Some(p.time_s),
+                p.max_engagement_deg,
+                p.p99_engagement_deg,
+                p.max_radial_mm,
+            ));
+        }
         if let Some(p) = &c.plunge {
             lines.push((
                 format!("ours ({}, plunge)", c.method),

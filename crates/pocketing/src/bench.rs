@@ -516,9 +516,10 @@ pub struct BenchConfig {
     /// stage 7's helix ([`HelixEntryRule::builtin`]); `None` = a plunge at its first point. The
     /// offset baselines always plunge.
     pub helix_entry: Option<HelixEntryRule>,
-    /// Also measure the curvilinear path with a plunge (fills `curvilinear.plunge`), to compare
-    /// the two entries on the same path.
-    pub compare_plunge: bool,
+    /// Also measure the curvilinear path with a plunge (fills `curvilinear.plunge`) and with a
+    /// helix about its centre, started where it leaves the helix circle (fills
+    /// `curvilinear.centred_helix`), to compare the entries on the same spiral.
+    pub compare_entries: bool,
 }
 
 impl Default for BenchConfig {
@@ -535,7 +536,7 @@ impl Default for BenchConfig {
             distance_blend: 0.0,
             engagement: Some(EngagementParams::default()),
             helix_entry: HelixEntryRule::builtin(),
-            compare_plunge: false,
+            compare_entries: false,
         }
     }
 }
@@ -616,9 +617,14 @@ pub struct CurvilinearStats {
     #[serde(default)]
     pub entry: Option<String>,
     /// The same path measured with a plunge at its first point
-    /// ([`BenchConfig::compare_plunge`]).
+    /// ([`BenchConfig::compare_entries`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub plunge: Option<EngagementStats>,
+    /// The path entered by a helix about its centre (same radius rule) and started where it
+    /// leaves the helix circle ([`crate::PocketPath::after_centred_helix`];
+    /// [`BenchConfig::compare_entries`]): its own length, time and engagement.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centred_helix: Option<PathStats>,
 }
 
 /// One benchmark row.
@@ -710,10 +716,25 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                 _ => PathEntry::plunge(),
             };
             let e_cur = eng(&cur.points, cur_entry.entry);
-            let e_cur_plunge = if cfg.compare_plunge {
+            let e_cur_plunge = if cfg.compare_entries {
                 eng(&cur.points, Entry::Plunge)
             } else {
                 None
+            };
+            let centred = match (&cfg.helix_entry, cfg.compare_entries) {
+                (Some(rule), true) => {
+                    let radii = HELIX_SCALES.map(|s| rule.radius * tool * s);
+                    cur.after_centred_helix(&radii).map(|(p, h)| {
+                        let t = time_path(&p.points, feed, &cfg.limits);
+                        let entry = Entry::Helix {
+                            center: h.center,
+                            radius: h.radius,
+                        };
+                        let label = format!("centred helix r={:.2}D", h.radius / tool);
+                        PathStats::new(&t, Some(p.max_gap), eng(&p.points, entry), &label)
+                    })
+                }
+                _ => None,
             };
             let adaptive = cfg
                 .adaptive
@@ -763,6 +784,7 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                     max_radial_mm: e_cur.map(|e| e.max_radial_mm),
                     entry: Some(cur_entry.label.clone()),
                     plunge: e_cur_plunge,
+                    centred_helix: centred,
                 },
                 adaptive,
                 saving_pct: 100.0 * (1.0 - t_cur.total_time / t_off.total_time),

@@ -216,6 +216,14 @@ impl Method {
     }
 }
 
+/// A helix the tool descends on before a path: its tool-centre circle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HelixEntry {
+    pub center: DVec2,
+    /// Tool-centre radius (mm); the hole it clears has radius `radius` + D/2.
+    pub radius: f64,
+}
+
 /// A pocketing tool path (tool-centre points in the pocket plane), roughing then finishing.
 #[derive(Debug, Clone)]
 pub struct PocketPath {
@@ -292,6 +300,56 @@ impl PocketPath {
             rho1 = rho1.max(b.length());
         }
         Some(((rmax - rho1) / stepover - 1e-9).ceil().max(0.0) as usize + 1)
+    }
+
+    /// This path entered by a helix about its first point (a spiral's centre) of the first of
+    /// `radii` (tool-centre radius ρ, mm, largest first) whose circle lies inside ∂Ω at least ρ
+    /// from it (stage 7's fit rule), starting where the path first leaves that circle: the
+    /// tool positions inside it lie in the hole the helix clears (radius ρ + R), so they would
+    /// cut nothing. The rest of the path is unchanged, so the helix and it cover what the
+    /// whole path covered. `None` where no radius fits, ∂Ω is missing, or the path does not
+    /// leave the circle before its finishing pass.
+    pub fn after_centred_helix(&self, radii: &[f64]) -> Option<(PocketPath, HelixEntry)> {
+        let c = *self.points.first()?;
+        if self.boundary.len() < 3 {
+            return None;
+        }
+        let idx = geom::SegIndex::new(&[&self.boundary], true);
+        let rho = radii.iter().copied().find(|&rho| {
+            rho.is_finite()
+                && rho > 0.0
+                && geom::point_in_loop(c, &self.boundary)
+                && idx.nearest(c) >= rho + 1e-6
+        })?;
+        let i = self.points.iter().position(|p| p.distance(c) > rho)?;
+        if i >= self.finish_start {
+            return None;
+        }
+        // where the segment into points[i] crosses the circle: |a + t(b − a) − c| = ρ, the
+        // root in (0, 1] (a inside, b outside)
+        let (a, b) = (self.points[i - 1], self.points[i]);
+        let (u, v) = (a - c, b - a);
+        let (qa, qb, qc) = (
+            v.length_squared(),
+            2.0 * u.dot(v),
+            u.length_squared() - rho * rho,
+        );
+        let t = ((-qb + (qb * qb - 4.0 * qa * qc).max(0.0).sqrt()) / (2.0 * qa)).clamp(0.0, 1.0);
+        let q = c + (u + t * v).normalize_or_zero() * rho;
+        let mut points = Vec::with_capacity(self.points.len() - i + 1);
+        points.push(q);
+        points.extend_from_slice(&self.points[i..]);
+        Some((
+            PocketPath {
+                points,
+                finish_start: self.finish_start - i + 1,
+                ..self.clone()
+            },
+            HelixEntry {
+                center: c,
+                radius: rho,
+            },
+        ))
     }
 
     /// Largest distance between consecutive points.

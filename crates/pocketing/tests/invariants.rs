@@ -93,6 +93,59 @@ fn check_opt(
     );
 }
 
+/// The spiral entered by a helix about its centre and started where it leaves the helix
+/// circle ([`PocketPath::after_centred_helix`], radius 0.4 D as in knowledge/methods.ron's
+/// closed-pocket method, or smaller where that does not fit): the helix circle (one revolution
+/// ending at the new start) followed by the shortened path keeps every invariant of the whole
+/// path (inside ∂Ω, no gouge, one continuous path, coverage), the path is a tail of the
+/// original from a point on the circle, and it is shorter.
+fn check_centred_helix(pocket: &Pocket, params: &PocketParams, path: &PocketPath, label: &str) {
+    let d = params.tool_diameter;
+    let radii = [0.4 * d, 0.2 * d, 0.1 * d];
+    let Some((short, helix)) = path.after_centred_helix(&radii) else {
+        panic!("{label}: no centred helix fits");
+    };
+    assert_eq!(helix.center, path.points[0], "{label}");
+    // the helix fits: its circle inside ∂Ω
+    let bidx = SegIndex::new(&[&path.boundary], true);
+    assert!(point_in_loop(helix.center, &path.boundary), "{label}");
+    assert!(bidx.nearest(helix.center) >= helix.radius, "{label}");
+    let q = short.points[0];
+    assert!(
+        (q.distance(helix.center) - helix.radius).abs() <= 1e-9 * d,
+        "{label}: start {q} not on the helix circle"
+    );
+    // a tail of the original path
+    let k = path.points.len() - short.points.len() + 1;
+    assert_eq!(&short.points[1..], &path.points[k..], "{label}");
+    assert!(
+        path.points[..k]
+            .iter()
+            .all(|p| p.distance(helix.center) <= helix.radius + 1e-9),
+        "{label}: a dropped point lies outside the helix circle"
+    );
+    assert_eq!(
+        path.points.len() - short.points.len(),
+        path.finish_start - short.finish_start,
+        "{label}: finishing pass moved"
+    );
+    assert!(short.length() < path.length(), "{label}: not shorter");
+    // helix, then the path, as one tool-centre path
+    let n =
+        ((std::f64::consts::TAU * helix.radius / (0.25 * params.stepover)).ceil() as usize).max(8);
+    let a0 = (q - helix.center).to_angle();
+    let mut whole = short.clone();
+    whole.points = (0..n)
+        .map(|j| {
+            let a = a0 + std::f64::consts::TAU * j as f64 / n as f64;
+            helix.center + helix.radius * DVec2::from_angle(a)
+        })
+        .chain(short.points.iter().copied())
+        .collect();
+    whole.finish_start += n;
+    check(pocket, params, &whole, &format!("{label} + centred helix"));
+}
+
 /// Offset and curvilinear paths of one bench pocket at size `l`, checked. `coarse` meshes the
 /// PDE at half the stepover instead of a third (2.25× fewer elements) for the
 /// default test run; the ignored sweeps use the production mesh.
@@ -125,6 +178,12 @@ fn bench_case(name: &str, l: f64, coarse: bool, field: thinplan_pocketing::Field
         "{name} L={l}: a spiral was refused: {choice}"
     );
     check(
+        &bp.pocket,
+        &params,
+        &cur,
+        &format!("curvilinear {name} L={l} {field:?}"),
+    );
+    check_centred_helix(
         &bp.pocket,
         &params,
         &cur,
@@ -317,6 +376,9 @@ fn star_case(a: [(f64, f64); 3], size: f64, coarse: bool) {
         &cur,
         &format!("star {a:?} {size:.1} {:?}", cur.method),
     );
+    if cur.method != Method::OffsetFallback {
+        check_centred_helix(&pocket, &params, &cur, &format!("star {a:?} {size:.1}"));
+    }
     // The offset baseline is not checked for coverage here: on star pockets whose inner rings
     // get corners sharper than ~47° the gap between rings exceeds 2R and plain parallel
     // offsets leave material (README, known gaps; seed in invariants.proptest-regressions).
