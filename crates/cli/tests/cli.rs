@@ -465,13 +465,13 @@ fn plan_json_machining_features_follow_the_contract() {
 const MISSED_ALLOWANCE: &[(&str, f64, &str)] = &[
     ("chamfered_rib", 3.0, "cells at the rib's ends where the rest pass's run-off leaves the wall (measured 1.9)"),
     ("crossing_ribs", 750.0, "two-cell columns in the rib junctions' sharp corners and the junction corners the Ø12 reaches partly from beside the feature (measured 656.8)"),
-    ("flange_cutouts", 280.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab. Up from 157 since a tool may overhang an open edge a whole diameter only into space already cut: beyond the pocket-side steps stands the next step (wall support), so the Ø20 reaches 1 mm less of each 2 mm slab from that side (measured 272.7)"),
+    ("flange_cutouts", 40.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab (measured 30.4; 157 before the wall rest pass, 273 while the whole-diameter overhang reached only space already cut and no wall rest pass finished the slabs' faces)"),
     ("flange_web_slot", 0.5, "single cells at the slot's corners (measured 0.1)"),
-    ("isogrid", 1300.0, "strips at the ribs' ends and pocket corners the Ø12 reaches only partly (measured 1274.8; 2961 before the R5 corners no tool fits alone were reached from the space cut beside them)"),
+    ("isogrid", 1000.0, "strips at the ribs' ends and pocket corners the Ø12 reaches only partly (measured 963.7; 2961 before the R5 corners no tool fits alone were reached from the space cut beside them, 1275 before the wall rest pass)"),
     ("pentagon_pocket", 0.5, "single 0.2 mm cells at the corners (the ideal is evaluated at cell centres; measured 0.27)"),
     ("tall_rib", 0.0, "nothing left (measured 0.0)"),
     ("wall_holes", 0.1, "single cells at the wall's ends (measured 0.03)"),
-    ("wing_rib", 530.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) and cells in the pockets' sharp corners (measured 515.1; 474 before open edges let the tool overhang a whole diameter only into space already cut)"),
+    ("wing_rib", 390.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) and cells in the pockets' sharp corners (measured 372.4; 474 before, 515 while the whole-diameter overhang reached only space already cut and no wall rest pass finished the walls' ends)"),
 ];
 
 /// The whole pipeline to G-code, replayed by the independent stock
@@ -550,11 +550,16 @@ fn assert_machined(names: &[&str]) {
         // smallest tool's corner-radius fillet and cells at the walls that
         // the plan does not estimate. Hence the plan lies between the
         // simulation's unreachable and unreachable + missed, within a slack
-        // of 30 mm³ + 10 %.
+        // of 30 mm³ + 10 %. Above, 15 %: each feature's estimate is what its
+        // own passes leave, and its neighbours' wall rest passes (a smaller
+        // tool along their walls' ends, run last) take part of that, which
+        // no single feature's estimate sees (isogrid: 5138 estimated, 3569
+        // unreachable + 964 missed).
         let unreach = v["leftover_unreachable"]["volume_mm3"].as_f64().unwrap();
         let slack = 30.0 + 0.1 * reported;
+        let slack_above = 30.0 + 0.15 * reported;
         assert!(
-            reported >= unreach - slack && reported <= unreach + missed + slack,
+            reported >= unreach - slack && reported <= unreach + missed + slack_above,
             "{name}: the plan reports {reported:.1} mm³ unreachable, the simulation \
              {unreach:.1} unreachable + {missed:.1} missed"
         );

@@ -492,7 +492,13 @@ fn check_with_part(plan: &Plan, k: &Knowledge, frame: &Frame, part: &[Body], rep
                         for &(what, r, from, upto) in &cyl {
                             let c_lo = p.z.min(q.z) + from;
                             let c_hi = p.z.max(q.z) + upto;
-                            if z_hi - c_lo <= CONTACT || c_hi - body.z_lo <= CONTACT {
+                            // A feature cut down to its bottom has nothing
+                            // left, though an operation of it (a rest pass
+                            // run last) is still to come.
+                            if z_hi - c_lo <= CONTACT
+                                || c_hi - body.z_lo <= CONTACT
+                                || z_hi - body.z_lo <= CONTACT
+                            {
                                 continue;
                             }
                             let (p2, q2) = (p.truncate(), q.truncate());

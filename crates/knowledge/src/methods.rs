@@ -70,6 +70,12 @@ pub struct Method {
     /// corner radius of the tool set finishes it; `None`: no rest pass.
     #[serde(default)]
     pub rest_pass: Option<RestPass>,
+    /// A rest pass up the product walls: where the feature's tool cannot
+    /// come beside a wall (corners and fillets at its ends narrower than
+    /// the tool) and leaves more than `min_left` on it, a smaller tool of
+    /// the set finishes those stretches at every level; `None`: no pass.
+    #[serde(default)]
+    pub wall_rest: Option<WallRest>,
     pub entry: LevelEntry,
     /// How far the tool may reach beyond non-product edges.
     pub overhang: Overhang,
@@ -249,6 +255,23 @@ pub struct RestPass {
     pub run_up: RunUp,
 }
 
+/// The rest pass up product walls, with the largest tool of the set that
+/// is smaller than the feature's tool.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallRest {
+    /// Least thickness (mm) left on the wall by the feature's tool worth a
+    /// pass.
+    pub min_left: f64,
+    /// Run-up onto each pass (from the space the feature's tool cleared).
+    pub run_up: RunUp,
+    /// `true`: stage 8 runs these passes at the end with the floor rest
+    /// passes, one tool change for all; `false`: right after the feature's
+    /// other operations, while what stands beside the wall still supports
+    /// it (a tool change there and back for every feature).
+    pub run_last: bool,
+}
+
 /// How the tool gets down to a z-level: never an axial plunge.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum LevelEntry {
@@ -383,6 +406,20 @@ impl MethodKnowledge {
                     out.push(format!(
                         "method `{id}`: a rest_pass finishes product floors, but the method \
                          applies to features without one"
+                    ));
+                }
+            }
+            if let Some(w) = &m.wall_rest {
+                if !(w.min_left.is_finite() && w.min_left > 0.0) {
+                    out.push(format!(
+                        "method `{id}`: wall_rest min_left {} must be positive",
+                        w.min_left
+                    ));
+                }
+                if m.boundary.is_none() {
+                    out.push(format!(
+                        "method `{id}`: a wall_rest finishes product walls, but the method \
+                         has no boundary region (no product sides)"
                     ));
                 }
             }

@@ -316,11 +316,26 @@ fn broken_methods_are_refused_with_every_problem() {
     // Half the tool diameter is the most a tool may cross into a neighbour;
     // a plunge (0°) is no entry; the closed-pocket method removed leaves
     // closed profiles without a method.
-    // A rest pass needs a positive corner-radius gain.
+    // A rest pass needs a positive corner-radius gain, a wall rest pass a
+    // positive thickness, and a method without product sides (no boundary
+    // region) no wall rest pass.
+    let open_method = "            boundary: None,\n            rest: (stepover: 0.6, depth: 0.5),\n            full_cut: Never,\n            mirror_layers: WhenOddPasses,\n            bottom_layer: None,\n";
+    assert!(
+        text.contains(open_method),
+        "the `open` method's block moved"
+    );
     let broken = text
         .replacen("feature: 0.5", "feature: 0.8", 1)
         .replacen("Ramp(angle_deg: 3.0)", "Ramp(angle_deg: 0.0)", 1)
-        .replacen("min_corner_gain: 0.1", "min_corner_gain: -0.1", 1);
+        .replacen("min_corner_gain: 0.1", "min_corner_gain: -0.1", 1)
+        .replacen("min_left: 0.1", "min_left: 0.0", 1)
+        .replacen(
+            open_method,
+            &format!(
+                "{open_method}            wall_rest: Some((min_left: 0.1, run_up: Circular(radius: 0.25), run_last: true)),\n"
+            ),
+            1,
+        );
     let cut = broken.find("id: \"closed_pocket\"").unwrap();
     let start = broken[..cut].rfind("        (").unwrap();
     let end = broken.rfind("    ],").unwrap();
@@ -333,6 +348,14 @@ fn broken_methods_are_refused_with_every_problem() {
     assert!(text.contains("entry angle 0°"), "{text}");
     assert!(text.contains("Closed sides"), "{text}");
     assert!(text.contains("min_corner_gain -0.1"), "{text}");
+    assert!(
+        text.contains("wall_rest min_left 0 must be positive"),
+        "{text}"
+    );
+    assert!(
+        text.contains("method `open`: a wall_rest finishes product walls"),
+        "{text}"
+    );
     assert!(text.contains("methods.ron"), "{text}");
 }
 

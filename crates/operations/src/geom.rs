@@ -57,6 +57,45 @@ impl Edge2 {
         }
     }
 
+    /// The edge cut into pieces no longer than `max_len` (arcs into arcs of
+    /// equal sweep), end to end.
+    pub fn split(&self, max_len: f64) -> Vec<Edge2> {
+        let k = (self.length() / max_len).ceil().max(1.0) as usize;
+        if k == 1 {
+            return vec![*self];
+        }
+        match self.arc() {
+            None => (0..k)
+                .map(|j| Edge2 {
+                    a: self.a.lerp(self.b, j as f64 / k as f64),
+                    b: self.a.lerp(self.b, (j + 1) as f64 / k as f64),
+                    bulge: 0.0,
+                })
+                .collect(),
+            Some((r, c)) => {
+                let sweep = 4.0 * self.bulge.atan();
+                let a0 = (self.a - c).to_angle();
+                let at = |j: usize| {
+                    if j == 0 {
+                        self.a
+                    } else if j == k {
+                        self.b
+                    } else {
+                        c + r * DVec2::from_angle(a0 + sweep * j as f64 / k as f64)
+                    }
+                };
+                let bulge = (sweep / (4.0 * k as f64)).tan();
+                (0..k)
+                    .map(|j| Edge2 {
+                        a: at(j),
+                        b: at(j + 1),
+                        bulge,
+                    })
+                    .collect()
+            }
+        }
+    }
+
     /// Points along the edge, no chord longer than `step` (end points included).
     pub fn sample(&self, step: f64) -> Vec<DVec2> {
         match self.arc() {

@@ -6,7 +6,7 @@ use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 use glam::{DVec2, DVec3};
 use thinplan_knowledge::{
     FullCut, Knowledge, LevelEntry, Machine, Material, Method, MirrorLayers, Pattern, RestPass,
-    RunUp, SidesMatch, SpindleDirection, Tool, ToolChoice, ToolSet,
+    RunUp, SidesMatch, SpindleDirection, Tool, ToolChoice, ToolSet, WallRest,
 };
 use thinplan_plan::{Adjacency, MachiningFeature, Provenance, ProvenanceSource};
 
@@ -1742,6 +1742,37 @@ fn plan_band(
             ops.push(lop(b, prov));
         }
     }
+    let mut wall_levels: Vec<f64> = zs.clone();
+    if wall_levels.last().is_none_or(|z| *z > z_min + 1e-9) {
+        wall_levels.push(z_min);
+    }
+    let ctx = RestCtx {
+        f,
+        m,
+        env,
+        free,
+        removed,
+        tool,
+        g: &g,
+        z_min,
+        z_top,
+        levels: &wall_levels,
+        safe_z,
+        rapid_floor,
+    };
+    // The wall rest pass: stretches of product wall this tool could not
+    // come beside, finished by a smaller tool right after it.
+    if let Some(w) = m
+        .wall_rest
+        .as_ref()
+        .filter(|_| !ops.is_empty() && !g.product.is_empty())
+    {
+        match rest_pass(&ctx, Rest::Wall(w)) {
+            Ok(Some(op)) => ops.push(op),
+            Ok(None) => {}
+            Err(e) => warnings.push(format!("{}: no wall rest pass: {e}", f.id)),
+        }
+    }
     // The rest pass: the fillet this tool's corner radius leaves along the
     // product walls' feet, finished by a smaller corner radius.
     if let Some(rp) = m
@@ -1749,20 +1780,7 @@ fn plan_band(
         .as_ref()
         .filter(|_| bottom_product && !ops.is_empty() && !g.product.is_empty())
     {
-        let ctx = RestCtx {
-            f,
-            m,
-            env,
-            free,
-            removed,
-            tool,
-            g: &g,
-            z_min,
-            z_top,
-            safe_z,
-            rapid_floor,
-        };
-        match rest_pass(&ctx, rp) {
+        match rest_pass(&ctx, Rest::Floor(rp)) {
             Ok(Some(op)) => ops.push(op),
             Ok(None) => {}
             Err(e) => warnings.push(format!("{}: no rest pass: {e}", f.id)),
@@ -1861,18 +1879,38 @@ struct RestCtx<'a> {
     g: &'a Geometry,
     z_min: f64,
     z_top: f64,
+    /// The levels of the feature's passes, top down, the floor last.
+    levels: &'a [f64],
     safe_z: f64,
     rapid_floor: f64,
 }
 
-/// The rest pass of a feature with a product floor (`methods.<id>.rest_pass`):
-/// boundary passes at the floor with the tool of the set that has the
-/// smallest corner radius (then the largest diameter), where that radius is
-/// smaller than the feature tool's by `min_corner_gain`. Only along stretches
-/// where the feature's tool has been beside the wall (its centre region
-/// grown by the difference of the radii), so the pass cuts the fillet and
-/// nothing more; links stay in that cleared space. `None`: no tool gains.
-fn rest_pass(c: &RestCtx, rp: &RestPass) -> Result<Option<LocalOp>, String> {
+/// Which rest pass: the fillet at a product floor, or stretches of product
+/// walls the feature's tool could not come beside.
+#[derive(Clone, Copy)]
+enum Rest<'k> {
+    Floor(&'k RestPass),
+    Wall(&'k WallRest),
+}
+
+/// A rest pass along the product walls with a smaller tool of the set.
+///
+/// `Floor` (`methods.<id>.rest_pass`): boundary passes at the floor with the
+/// tool that has the smallest corner radius (then the largest diameter),
+/// where that radius is smaller than the feature tool's by
+/// `min_corner_gain`, only along stretches where the feature's tool has been
+/// beside the wall (its centre region grown by the difference of the
+/// radii), so the pass cuts the fillet and nothing more.
+///
+/// `Wall` (`methods.<id>.wall_rest`): boundary passes at every level with
+/// the largest tool smaller than the feature's, only along stretches where
+/// the feature's tool left more than `min_left` on the wall (its disc never
+/// came that close: corners and fillets at the wall's ends narrower than
+/// it).
+///
+/// Links stay in the space the feature's tool cleared. `None`: no tool
+/// gains, or nothing is left.
+fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     let mk = &c.env.k.methods;
     let main = c.tool;
     let mut cands: Vec<&Tool> = c
@@ -1880,16 +1918,24 @@ fn rest_pass(c: &RestCtx, rp: &RestPass) -> Result<Option<LocalOp>, String> {
         .tools
         .tools
         .iter()
-        .filter(|t| {
-            t.corner_radius <= main.corner_radius - rp.min_corner_gain + 1e-12
-                && t.diameter <= main.diameter
+        .filter(|t| match rest {
+            Rest::Floor(rp) => {
+                t.corner_radius <= main.corner_radius - rp.min_corner_gain + 1e-12
+                    && t.diameter <= main.diameter
+            }
+            Rest::Wall(_) => t.diameter < main.diameter - 1e-9,
         })
         .collect();
-    cands.sort_by(|a, b| {
-        a.corner_radius
+    cands.sort_by(|a, b| match rest {
+        Rest::Floor(_) => a
+            .corner_radius
             .total_cmp(&b.corner_radius)
             .then_with(|| b.diameter.total_cmp(&a.diameter))
-            .then_with(|| a.id.cmp(&b.id))
+            .then_with(|| a.id.cmp(&b.id)),
+        Rest::Wall(_) => b
+            .diameter
+            .total_cmp(&a.diameter)
+            .then_with(|| a.id.cmp(&b.id)),
     });
     let Some((small, g2)) = cands
         .iter()
@@ -1905,6 +1951,18 @@ fn rest_pass(c: &RestCtx, rp: &RestPass) -> Result<Option<LocalOp>, String> {
     if cleared.is_empty() {
         return Ok(None);
     }
+    // The floor pass runs where the feature's tool was beside the wall; the
+    // wall pass where it stayed more than `min_left` away.
+    let (beside, want_inside, run_up) = match rest {
+        Rest::Floor(rp) => (cleared.clone(), true, rp.run_up),
+        Rest::Wall(w) => (
+            c.g.centre
+                .offset(-(c.g.r - g2.r + w.min_left))
+                .polygons(STEP),
+            false,
+            w.run_up,
+        ),
+    };
     // Which loop stretches run along product: within the boundary band
     // (half the boundary stepover), as for the feature's own passes.
     let Some(bd) = c.m.boundary.as_ref() else {
@@ -1913,11 +1971,20 @@ fn rest_pass(c: &RestCtx, rp: &RestPass) -> Result<Option<LocalOp>, String> {
     let band = 0.5 * bd.stepover * d2;
     let mut passes = Vec::new();
     for (chain, _) in boundary_chains(&g2, band, mk.spindle) {
-        // Split where the feature's tool never came beside the wall.
-        let ok = |e: &Edge2| e.sample(STEP).iter().all(|p| inside(*p, &cleared));
+        let ok = |e: &Edge2| {
+            e.sample(STEP)
+                .iter()
+                .all(|p| inside(*p, &beside) == want_inside)
+        };
+        // A wall stretch ends where the feature's tool came close enough:
+        // decided piece by piece along the chain.
+        let pieces: Vec<Edge2> = match rest {
+            Rest::Floor(_) => chain,
+            Rest::Wall(_) => chain.iter().flat_map(|e| e.split(4.0 * STEP)).collect(),
+        };
         let mut cur: Vec<Edge2> = Vec::new();
         let mut parts = Vec::new();
-        for e in chain {
+        for e in pieces {
             if ok(&e) {
                 cur.push(e);
             } else if !cur.is_empty() {
@@ -1932,7 +1999,7 @@ fn rest_pass(c: &RestCtx, rp: &RestPass) -> Result<Option<LocalOp>, String> {
             if len < STEP {
                 continue;
             }
-            passes.push(boundary_pass(&part, &g2, rp.run_up, d2, &cleared));
+            passes.push(boundary_pass(&part, &g2, run_up, d2, &cleared));
         }
     }
     if passes.is_empty() {
@@ -1944,35 +2011,72 @@ fn rest_pass(c: &RestCtx, rp: &RestPass) -> Result<Option<LocalOp>, String> {
         safe_z: c.safe_z,
         step: STEP,
     };
+    let levels: Vec<f64> = match rest {
+        Rest::Floor(_) => vec![c.z_min],
+        Rest::Wall(_) => c.levels.to_vec(),
+    };
     let mut b = Builder::new(DVec3::ZERO);
     let mut started = false;
-    for p in &passes {
-        go_to(&mut b, &mut started, &space, p.start, c.z_min);
-        b.follow(&p.segs, c.z_min, Kind::Boundary);
+    for &z in &levels {
+        for p in &passes {
+            go_to(&mut b, &mut started, &space, p.start, z);
+            b.follow(&p.segs, z, Kind::Boundary);
+        }
     }
     retract(&mut b, c.safe_z);
     check(&b, &g2, c.z_min, c.z_top, c.f)?;
     let (rpm, feed_rough, feed_finish) = conditions(c.env, small);
+    let suffix = match rest {
+        Rest::Floor(_) => "rest_pass",
+        Rest::Wall(_) => "wall_rest",
+    };
     let mut prov = Provenance::new(
         ProvenanceSource::Knowledge,
-        format!("methods.{}.rest_pass", c.m.id),
+        format!("methods.{}.{suffix}", c.m.id),
     );
     let v = &mut prov.values;
     v.insert("tool_diameter_mm".into(), d2);
     v.insert("tool_corner_radius_mm".into(), small.corner_radius);
+    v.insert("feature_tool_diameter_mm".into(), main.diameter);
     v.insert("feature_tool_corner_radius_mm".into(), main.corner_radius);
-    v.insert("min_corner_gain_mm".into(), rp.min_corner_gain);
     v.insert("spindle_rpm".into(), rpm);
     v.insert("feed_finish_mm_min".into(), feed_finish);
     v.insert("feed_boundary_mm_min".into(), feed_finish);
-    v.insert("depth_of_cut_mm".into(), main.corner_radius);
     v.insert("passes".into(), passes.len() as f64);
-    v.insert("layers".into(), 1.0);
-    prov.note = format!(
-        "pattern=RestPass; layer=floor; fillet of {} (corner radius {:.2} mm) finished by {} \
-         (corner radius {:.2} mm)",
-        main.id, main.corner_radius, small.id, small.corner_radius
-    );
+    v.insert("layers".into(), levels.len() as f64);
+    match rest {
+        Rest::Floor(rp) => {
+            v.insert("min_corner_gain_mm".into(), rp.min_corner_gain);
+            v.insert("depth_of_cut_mm".into(), main.corner_radius);
+            prov.note = format!(
+                "pattern=RestPass; layer=floor; fillet of {} (corner radius {:.2} mm) finished \
+                 by {} (corner radius {:.2} mm)",
+                main.id, main.corner_radius, small.id, small.corner_radius
+            );
+        }
+        Rest::Wall(w) => {
+            v.insert("min_left_mm".into(), w.min_left);
+            if w.run_last {
+                v.insert(crate::RUN_LAST.into(), 1.0);
+            }
+            let depth = levels
+                .windows(2)
+                .map(|p| p[0] - p[1])
+                .chain(std::iter::once(c.z_top - levels[0]))
+                .fold(0.0, f64::max);
+            v.insert("depth_of_cut_mm".into(), depth);
+            prov.note = format!(
+                "pattern=RestPass; layer=walls; wall stretches {} (D {:.1} mm) left more than \
+                 {:.2} mm on, finished by {} (D {:.1} mm) at {} levels",
+                main.id,
+                main.diameter,
+                w.min_left,
+                small.id,
+                small.diameter,
+                levels.len()
+            );
+        }
+    }
     Ok(Some(LocalOp {
         method: c.m.id.clone(),
         tool: small.id.clone(),

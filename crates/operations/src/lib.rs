@@ -32,6 +32,16 @@ use thinplan_plan::{
 };
 
 pub use order::{order, OrderError};
+
+/// Provenance value (1) of an operation stage 8 runs at the end, with the
+/// floor rest passes (`methods.<id>.wall_rest` with `run_last`).
+pub const RUN_LAST: &str = "run_last";
+
+/// Whether stage 8 runs `op` at the end, by tool, after every other
+/// operation: floor rest passes, and wall rest passes the knowledge defers.
+pub fn runs_last(op: &Operation) -> bool {
+    op.provenance.rule.ends_with(".rest_pass") || op.provenance.values.get(RUN_LAST) == Some(&1.0)
+}
 pub use path::{Kind, LMove};
 
 /// Why stage 7 could not run at all (a single feature that cannot be milled

@@ -115,7 +115,7 @@ pub fn order_with_edges(
     }
     // A group's operations: its features' operations, interleaved by
     // feature order (simultaneous features are machined together).
-    let is_rest_pass = |i: usize| plan.operations[i].provenance.rule.ends_with(".rest_pass");
+    let is_rest_pass = |i: usize| crate::runs_last(&plan.operations[i]);
     let members = |g: MachiningFeatureId| -> Vec<usize> {
         let mut v = Vec::new();
         for (f, ops) in &ops_of {
@@ -178,8 +178,8 @@ pub fn order_with_edges(
         done.insert(best);
     }
     // Rest passes last, by tool, in their features' order: each only
-    // finishes its own feature's floor (after its other operations), and
-    // one tool change serves them all.
+    // finishes its own feature's floor or wall stretches (after its other
+    // operations), and one tool change serves them all.
     let feature_of: BTreeMap<OperationId, MachiningFeatureId> =
         plan.operations.iter().map(|o| (o.id, o.feature)).collect();
     let place: BTreeMap<MachiningFeatureId, usize> = out

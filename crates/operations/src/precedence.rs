@@ -245,7 +245,7 @@ pub fn cutting_pairs(
     let mut out = BTreeSet::new();
     for op in &plan.operations {
         let i = op.feature.0 as usize;
-        if i >= feats.len() || op.provenance.rule.ends_with(".rest_pass") {
+        if i >= feats.len() || crate::runs_last(op) {
             continue;
         }
         let Some(tool) = tools.tools.iter().find(|t| t.id == op.tool) else {

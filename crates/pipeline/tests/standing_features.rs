@@ -125,8 +125,8 @@ fn no_tool_centre_enters_a_feature_that_has_not_been_started() {
             .iter()
             .map(|t| (t.id.as_str(), t.flute_length))
             .collect();
-        // Floor rest passes run last by design and only finish floors.
-        let rest = |o: &Operation| o.provenance.rule.ends_with(".rest_pass");
+        // Rest passes stage 8 runs last, after every feature.
+        let rest = |o: &Operation| thinplan_operations::runs_last(o);
         let mut first: BTreeMap<u32, usize> = BTreeMap::new();
         for (at, id) in plan.operation_order.iter().enumerate() {
             let o = &plan.operations[id.0 as usize];
