@@ -1460,7 +1460,7 @@ fn plan_band(
     ];
     let mut mirror = false;
     if m.pattern.is_spiral() {
-        rest_plan = spiral_rest(f, m, &g, d, spacing, s_b, &mut notes)?;
+        rest_plan = spiral_rest(f, m, &g, d, spacing, s_b, true, &mut notes)?;
     } else if !rest_polys.is_empty() {
         let oneway = (m.pattern == Pattern::OneWay).then_some(oneway_dir);
         // Parity (§4.3.3, figure 4.22): choose the line count and the first
@@ -1482,7 +1482,15 @@ fn plan_band(
                 } + if extra { spacing * 0.5 } else { 0.0 };
                 let better = best.as_ref().is_none_or(|b| cost < b.0 - 1e-9);
                 if better {
-                    best = Some((cost, n, RestPlan { blocks, lines: n }));
+                    best = Some((
+                        cost,
+                        n,
+                        RestPlan {
+                            blocks,
+                            lines: n,
+                            helix: None,
+                        },
+                    ));
                 }
                 if passes.is_empty() {
                     break;
@@ -1584,7 +1592,7 @@ fn plan_band(
                 angle,
                 d,
                 &g,
-                bi == 0 && m.pattern.is_spiral(),
+                if bi == 0 { rest_plan.helix } else { None },
                 mk.spindle,
                 entry_kind,
             )
@@ -1686,7 +1694,7 @@ fn plan_band(
         let blocks: Vec<Vec<DVec2>> = if bl.pattern.is_spiral() {
             let mut mm = m.clone();
             mm.pattern = bl.pattern;
-            spiral_rest(f, &mm, &g, d, so, s_b, &mut bnotes)?.blocks
+            spiral_rest(f, &mm, &g, d, so, s_b, false, &mut bnotes)?.blocks
         } else {
             let oneway = (bl.pattern == Pattern::OneWay).then_some(oneway_dir);
             parallel_blocks(&rest_polys, dir, progress, so, false, false, oneway).0
@@ -1706,7 +1714,7 @@ fn plan_band(
                 angle,
                 d,
                 &g,
-                bl.pattern.is_spiral(),
+                None,
                 mk.spindle,
                 Kind::BottomFinish,
             )
@@ -2122,11 +2130,15 @@ fn centroid(polys: &[Vec<DVec2>]) -> DVec2 {
 struct RestPlan {
     blocks: Vec<Vec<DVec2>>,
     lines: usize,
+    /// A helix about the spiral's centre (centre, tool-centre radius) the
+    /// first block starts on: the spiral inside its circle is left out.
+    helix: Option<(DVec2, f64)>,
 }
 
 /// The rest region of a closed pocket: the pocketing crate's curvilinear
 /// spiral (or offset rings), without its finishing ring (the boundary pass
 /// replaces it with true arcs).
+#[allow(clippy::too_many_arguments)]
 fn spiral_rest(
     f: &MachiningFeature,
     m: &Method,
@@ -2134,6 +2146,7 @@ fn spiral_rest(
     d: f64,
     stepover: f64,
     s_b: f64,
+    centred_helix: bool,
     notes: &mut Vec<String>,
 ) -> Result<RestPlan, String> {
     use thinplan_pocketing::{curvilinear_path, offset_path, Pocket, PocketParams};
@@ -2157,6 +2170,26 @@ fn spiral_rest(
     if let Some(r) = &res.fallback_reason {
         notes.push(format!("fallback={r}"));
     }
+    // A spiral about a centre entered by a helix about that centre (the
+    // method's radius, shrunk as stage 7's fit rule does): the helix clears
+    // a hole of radius ρ + r, so the spiral starts where it leaves the
+    // circle (issue 6: no slotting first turn around a plunge hole).
+    let mut helix = None;
+    let mut res = res;
+    if let (true, LevelEntry::Helix { radius, .. }, Some(_)) = (centred_helix, m.entry, res.center)
+    {
+        let radii: Vec<f64> = [1.0, 0.5, 0.25].iter().map(|s| radius * d * s).collect();
+        if let Some((trimmed, h)) = res.after_centred_helix(&radii) {
+            let fits = inside(h.center, &g.centre_polys)
+                && boundary_distance(h.center, &g.centre_polys) >= h.radius + 1e-6
+                && product_distance(h.center, &g.product) >= g.r + h.radius;
+            if fits {
+                notes.push(format!("entry=centred helix r={:.3}", h.radius));
+                helix = Some((h.center, h.radius));
+                res = trimmed;
+            }
+        }
+    }
     let mut pts: Vec<DVec2> = res.points[..res.finish_start.min(res.points.len())].to_vec();
     // Keep only points the tool centre may reach (the pocket crate offsets
     // the same region; this guards against its sampling chords).
@@ -2167,6 +2200,7 @@ fn spiral_rest(
     Ok(RestPlan {
         blocks: vec![pts],
         lines: 1,
+        helix,
     })
 }
 
@@ -2198,11 +2232,26 @@ fn enter(
     angle: f64,
     d: f64,
     g: &Geometry,
-    spiral_start: bool,
+    centred: Option<(DVec2, f64)>,
     spindle: SpindleDirection,
     kind: Kind,
 ) -> Option<()> {
     if z_from - z <= 1e-12 {
+        return Some(());
+    }
+    // Down milling around the helix: counter-clockwise for M3.
+    let ccw = spindle == SpindleDirection::Clockwise;
+    if let Some((c, rho)) = centred {
+        // A spiral started where it leaves this helix's circle: only this
+        // helix clears the middle, so there is no other way in.
+        let fits = inside(c, &g.centre_polys)
+            && boundary_distance(c, &g.centre_polys) >= rho + 1e-6
+            && product_distance(c, &g.product) >= g.r + rho;
+        if !fits {
+            return None;
+        }
+        let a0 = (block[0] - c).to_angle();
+        helix(b, c, rho, a0, z_from, z, angle, ccw, kind);
         return Some(());
     }
     if let LevelEntry::Helix { radius, .. } = entry {
@@ -2214,13 +2263,10 @@ fn enter(
                 && boundary_distance(c, &g.centre_polys) >= rho + 1e-6
                 && product_distance(c, &g.product) >= g.r + rho;
             if fits {
-                // Down milling around the helix: counter-clockwise for M3.
-                let ccw = spindle == SpindleDirection::Clockwise;
-                helix(b, c, rho, z_from, z, angle, ccw, kind);
+                helix(b, c, rho, 0.0, z_from, z, angle, ccw, kind);
                 return Some(());
             }
         }
-        let _ = spiral_start;
     }
     let min_len = 0.02 * d;
     if ramp(b, block, z_from, z, angle, min_len, kind).is_some() {

@@ -333,14 +333,15 @@ pub fn helix(
     b: &mut Builder,
     centre: DVec2,
     rho: f64,
+    start_angle: f64,
     z_from: f64,
     z_to: f64,
     angle_rad: f64,
     ccw: bool,
     kind: Kind,
 ) {
-    let start = centre + DVec2::new(rho, 0.0);
-    let opposite = centre - DVec2::new(rho, 0.0);
+    let start = centre + DVec2::from_angle(start_angle) * rho;
+    let opposite = centre - DVec2::from_angle(start_angle) * rho;
     let dz = z_from - z_to;
     let per_turn = std::f64::consts::TAU * rho * angle_rad.tan();
     let turns = (dz / per_turn).ceil().max(1.0) as usize;

@@ -223,6 +223,52 @@ fn closed_pocket_with_product_floor() {
     assert!(ops.operations[0].moves.iter().any(|m| m.arc.is_some()));
 }
 
+/// The spiral is entered by a helix about its own centre (radius from the
+/// closed-pocket method) and starts where it leaves the helix's circle,
+/// where the helix ended (the part of the spiral inside that circle lies in
+/// the hole the helix clears and is left out); the floor is still fully
+/// covered (the coverage check in `all_checks`).
+#[test]
+fn a_closed_pocket_is_entered_by_a_helix_about_the_spiral_centre() {
+    let (ops, _) = all_checks(pocket(0));
+    let op = &ops.operations[0];
+    assert!(
+        op.provenance.note.contains("entry=centred helix"),
+        "{}",
+        op.provenance.note
+    );
+    let cutting: Vec<&thinplan_plan::PathMove> = op
+        .moves
+        .iter()
+        .filter(|m| !matches!(m.region, Region3::Rapid | Region3::Link))
+        .collect();
+    let first = cutting[0]
+        .arc
+        .expect("the first cutting move is a helix arc");
+    let c = first.centre.truncate();
+    let helix_len = cutting
+        .iter()
+        .take_while(|m| {
+            m.arc
+                .is_some_and(|a| a.centre.truncate().distance(c) < 1e-6)
+        })
+        .count();
+    assert!(helix_len >= 2, "a helix of at least one turn");
+    let end = cutting[helix_len - 1].to;
+    let rho = end.truncate().distance(c);
+    assert!(
+        [1.0, 0.5, 0.25]
+            .iter()
+            .any(|s| (rho - s * 0.4 * 12.0).abs() < 1e-3),
+        "ρ = {rho}"
+    );
+    // Right after the helix the spiral goes on from where the helix ended,
+    // at the same height: no descent, no jump back to the centre.
+    let next = cutting[helix_len].to;
+    assert!((next.z - end.z).abs() < 1e-9);
+    assert!(next.truncate().distance(c) > 0.5 * rho, "{next:?}");
+}
+
 #[test]
 fn l_shape_with_an_island() {
     let (ops, k) = all_checks(l_with_island(0));
