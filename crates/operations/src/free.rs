@@ -54,12 +54,9 @@ pub(crate) fn free_space(plan: &Plan, i: usize, margin: f64) -> Option<Shapes> {
 /// of it when it is cut: outside the blank, the feature itself, and every
 /// feature before it in the machining order (the features stage 6 calls
 /// open across an edge), at every height of the feature.
-pub(crate) fn removed_space(plan: &Plan, i: usize, margin: f64) -> Option<Shapes> {
-    let order = crate::precedence::machining_order(plan);
-    let mut pos = vec![0usize; plan.machining_features.len()];
-    for (k, f) in order.iter().enumerate() {
-        pos[f.0 as usize] = k;
-    }
+/// `pos`: each feature's place in the machining order
+/// (`precedence::machining_positions`).
+pub(crate) fn removed_space(plan: &Plan, i: usize, margin: f64, pos: &[usize]) -> Option<Shapes> {
     space(plan, i, margin, |j| pos[j] < pos[i])
 }
 

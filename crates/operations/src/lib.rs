@@ -158,12 +158,8 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         warnings: Vec::new(),
         refusals: Vec::new(),
     };
-    let d_max = tools.tools.iter().map(|t| t.diameter).fold(0.0, f64::max);
-    let min_flute = tools
-        .tools
-        .iter()
-        .map(|t| t.flute_length)
-        .fold(f64::INFINITY, f64::min);
+    let (d_max, min_flute) = precedence::reach_and_rise(tools).unwrap_or((0.0, f64::INFINITY));
+    let positions = precedence::machining_positions(plan);
     // How far a feature no tool fits alone may be reached from beside it:
     // the smallest tool's diameter times the largest overhang the method
     // knowledge allows beyond an open edge.
@@ -208,7 +204,7 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
                 continue;
             }
             let free = free::free_space(plan, i, 2.0 * d_max);
-            let removed = free::removed_space(plan, i, 2.0 * d_max);
+            let removed = free::removed_space(plan, i, 2.0 * d_max, &positions);
             let obstacles = free::shank_obstacles(plan, i, d_max, min_flute, &shank_edges);
             // A geometry library panicking on an awkward profile
             // (cavalier_contours asserts on some degenerate offsets) refuses

@@ -46,6 +46,15 @@ pub fn machining_order(plan: &Plan) -> Vec<MachiningFeatureId> {
     order
 }
 
+/// Each feature's place in [`machining_order`], by feature index.
+pub(crate) fn machining_positions(plan: &Plan) -> Vec<usize> {
+    let mut pos = vec![0usize; plan.machining_features.len()];
+    for (k, f) in machining_order(plan).iter().enumerate() {
+        pos[f.0 as usize] = k;
+    }
+    pos
+}
+
 /// A feature's plan-view box (outer loop vertices; arcs as chords).
 pub(crate) fn bbox(f: &MachiningFeature) -> [f64; 4] {
     let mut b = [
@@ -86,10 +95,9 @@ pub(crate) fn shank_neighbour(
     b[0] <= a[2] + margin && a[0] <= b[2] + margin && b[1] <= a[3] + margin && a[1] <= b[3] + margin
 }
 
-/// The reach and the shortest flute of the plan's tool set: (largest
-/// diameter, shortest flute length), or `None` without a tool set.
-pub(crate) fn reach_and_rise(plan: &Plan, k: &thinplan_knowledge::Knowledge) -> Option<(f64, f64)> {
-    let tools = k.tool_set(&plan.setup.tool_set)?;
+/// The reach and the shortest flute of a tool set: (largest diameter,
+/// shortest flute length), or `None` for an empty set.
+pub(crate) fn reach_and_rise(tools: &thinplan_knowledge::ToolSet) -> Option<(f64, f64)> {
     let d = tools.tools.iter().map(|t| t.diameter).fold(0.0, f64::max);
     let flute = tools
         .tools
@@ -118,13 +126,13 @@ pub fn stage8_edges(
     plan: &Plan,
     k: &thinplan_knowledge::Knowledge,
 ) -> Vec<(MachiningFeatureId, MachiningFeatureId)> {
-    let Some((margin, rise)) = reach_and_rise(plan, k) else {
+    let Some(tools) = k.tool_set(&plan.setup.tool_set) else {
         return Vec::new();
     };
-    let cuts = k
-        .tool_set(&plan.setup.tool_set)
-        .map(|t| cutting_pairs(plan, t))
-        .unwrap_or_default();
+    let Some((margin, rise)) = reach_and_rise(tools) else {
+        return Vec::new();
+    };
+    let cuts = cutting_pairs(plan, tools);
     forward_edges(plan, |fi, fj| {
         shank_neighbour(fi, fj, margin, rise) || cuts.contains(&(fi.id, fj.id))
     })

@@ -25,14 +25,20 @@ fn signed_area(c: &[[f64; 2]]) -> f64 {
         / 2.0
 }
 
-fn contains(shapes: &Shapes, q: DVec2) -> bool {
-    shapes.iter().any(|s| {
-        let polys: Vec<Vec<DVec2>> = s
-            .iter()
-            .map(|c| c.iter().map(|p| DVec2::new(p[0], p[1])).collect())
-            .collect();
-        crate::geom::inside(q, &polys)
-    })
+/// Each shape's loops as points, for containment tests.
+fn polygons(shapes: &Shapes) -> Vec<Vec<Vec<DVec2>>> {
+    shapes
+        .iter()
+        .map(|s| {
+            s.iter()
+                .map(|c| c.iter().map(|p| DVec2::new(p[0], p[1])).collect())
+                .collect()
+        })
+        .collect()
+}
+
+fn contains(shapes: &[Vec<Vec<DVec2>>], q: DVec2) -> bool {
+    shapes.iter().any(|polys| crate::geom::inside(q, polys))
 }
 
 /// `f` grown by at most `reach` into `removed` (space cut before it, which
@@ -108,6 +114,7 @@ pub(crate) fn reached_from_beside(
     if total <= own_area * (1.0 + 1e-6) {
         return None;
     }
+    let (free_polys, removed_polys) = (polygons(free), polygons(removed));
     let classify = |c: &[[f64; 2]]| -> Vec<Adjacency> {
         let n = c.len();
         (0..n)
@@ -119,9 +126,9 @@ pub(crate) fn reached_from_beside(
                 let t = (b - a).normalize_or_zero();
                 // Outward: right of the edge (outer ccw, holes cw).
                 let q = (a + b) * 0.5 + DVec2::new(t.y, -t.x) * 1e-3;
-                if !contains(free, q) {
+                if !contains(&free_polys, q) {
                     Adjacency::Product
-                } else if contains(removed, q) {
+                } else if contains(&removed_polys, q) {
                     Adjacency::Open
                 } else {
                     Adjacency::Feature
