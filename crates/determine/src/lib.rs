@@ -50,6 +50,10 @@ pub const RULE_PREFIX: &str = "strategies.";
 /// The provenance rule of constraints carried over from stiffness constraints.
 pub const RULE_CARRIED: &str = "strategies.carried";
 
+/// The provenance rule of a carried constraint's exception: a feature of the
+/// second stiffness feature that would stand beside a shank goes first.
+pub const RULE_CARRIED_SHANK: &str = "strategies.carried_shank_access";
+
 /// Geometric tolerance, mm.
 const EPS: f64 = 1e-6;
 
@@ -131,7 +135,7 @@ pub fn determine(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Determinatio
             chains.push((sf.id, made));
         }
     }
-    carry_over(plan, &chains, &mut out);
+    carry_over(plan, k, &chains, &mut out);
     Ok(out)
 }
 
@@ -778,9 +782,13 @@ fn extend_chain(
     chain.push(id);
 }
 
-/// Stiffness constraints carried over to the owners' machining features.
+/// Stiffness constraints carried over to the owners' machining features:
+/// the last feature of the first before the first of the second. With the
+/// knowledge's `shank_access`, the order gives way where it would have a
+/// shank rub (`yield_to_shanks`).
 fn carry_over(
     plan: &Plan,
+    k: &Knowledge,
     chains: &[(StiffnessFeatureId, Vec<MachiningFeatureId>)],
     out: &mut Determination,
 ) {
@@ -789,6 +797,12 @@ fn carry_over(
             .iter()
             .find(|(o, _)| *o == id)
             .map(|(_, c)| c.as_slice())
+    };
+    let shank = if k.interference.shank_access {
+        k.tool_set(&plan.setup.tool_set)
+            .and_then(|t| t.reach_and_rise())
+    } else {
+        None
     };
     for c in &plan.stiffness_constraints {
         let (Some(a), Some(b)) = (chain_of(c.first), chain_of(c.second)) else {
@@ -803,13 +817,20 @@ fn carry_over(
                     "{} before {} ({}): the last feature of the first before the first of the second",
                     c.first, c.second, c.provenance.rule
                 );
-                out.constraints.push(Constraint {
+                let carried = Constraint {
                     first: *a.last().expect("chains are not empty"),
                     second: b[0],
                     kind: ConstraintKind::Before,
                     priority: c.priority,
                     provenance: p,
+                };
+                let yielded = shank.and_then(|(reach, rise)| {
+                    yield_to_shanks(out, plan.setup.up, a, b, c, reach, rise)
                 });
+                match yielded {
+                    Some(edges) => out.constraints.extend(edges),
+                    None => out.constraints.push(carried),
+                }
             }
             ConstraintKind::Simultaneous => out.warnings.push(format!(
                 "{} simultaneous with {} ({}): interleaving their machining features is not \
@@ -818,6 +839,205 @@ fn carry_over(
             )),
         }
     }
+}
+
+/// Where the first stiffness feature's machining feature `a_i` would be cut
+/// with the second's leading features `b_0..=b_j` still standing beside it
+/// higher than the shortest flute above its bottom (within the set's
+/// reach), a shank would rub them: those come before `a_i`, and the rest of
+/// the second after the whole first, so that the step approach interleaves
+/// with the layers above instead of the whole first going before the whole
+/// second (thesis figure 4.6: the order applied locally where it would
+/// hurt). `None` where no shank would rub, or where the interleaving would
+/// close a cycle with the constraints so far (recorded as a warning).
+fn yield_to_shanks(
+    out: &mut Determination,
+    up: DVec3,
+    a: &[MachiningFeatureId],
+    b: &[MachiningFeatureId],
+    c: &Constraint<StiffnessFeatureId>,
+    reach: f64,
+    rise: f64,
+) -> Option<Vec<Constraint<MachiningFeatureId>>> {
+    let feature = |id: MachiningFeatureId| &out.features[id.0 as usize];
+    let up = up.normalize_or_zero();
+    let extent = |id: MachiningFeatureId| Extent::of(feature(id), up);
+    let needs: Vec<usize> = a
+        .iter()
+        .map(|&ai| {
+            let ea = extent(ai);
+            b.iter()
+                .rposition(|&bj| ea.shank_neighbour(&extent(bj), reach, rise))
+                .map_or(0, |j| j + 1)
+        })
+        .collect();
+    let most = *needs.iter().max()?;
+    if most == 0 {
+        return None;
+    }
+    let mut edges = Vec::new();
+    for (&ai, &need) in a.iter().zip(&needs).filter(|(_, n)| **n > 0) {
+        let bj = b[need - 1];
+        let (fa, fb) = (extent(ai), extent(bj));
+        let mut p = Provenance::new(ProvenanceSource::Knowledge, RULE_CARRIED_SHANK)
+            .with_value("first", f64::from(c.first.0))
+            .with_value("second", f64::from(c.second.0))
+            .with_value("flute_length", rise)
+            .with_value("reach", reach)
+            .with_value("top_of_first", fb.hi)
+            .with_value("bottom_of_second", fa.lo);
+        p.note = format!(
+            "{} before {} ({}) gives way: {bj} stands {:.2} mm above {ai}'s bottom within Ø{reach} \
+             of it, higher than the shortest flute {rise}: a shank cutting {ai} would rub it",
+            c.first,
+            c.second,
+            c.provenance.rule,
+            fb.hi - fa.lo
+        );
+        edges.push(Constraint {
+            first: bj,
+            second: ai,
+            kind: ConstraintKind::Before,
+            priority: c.priority,
+            provenance: p,
+        });
+    }
+    // Every feature of the second still follows the first's features that
+    // do not need it gone: the two chains interleave top-down.
+    for (j, &bj) in b.iter().enumerate().take(most) {
+        let i0 = needs.iter().position(|&n| n > j).unwrap_or(a.len());
+        let starts_group = j == 0 || needs.iter().position(|&n| n > j - 1).unwrap_or(a.len()) != i0;
+        if i0 == 0 || !starts_group {
+            continue;
+        }
+        let mut p = Provenance::new(ProvenanceSource::Knowledge, RULE_CARRIED)
+            .with_value("first", f64::from(c.first.0))
+            .with_value("second", f64::from(c.second.0));
+        p.note = format!(
+            "{} before {} ({}): {} before {bj}, which goes early for a shank ({RULE_CARRIED_SHANK})",
+            c.first,
+            c.second,
+            c.provenance.rule,
+            a[i0 - 1]
+        );
+        edges.push(Constraint {
+            first: a[i0 - 1],
+            second: bj,
+            kind: ConstraintKind::Before,
+            priority: c.priority,
+            provenance: p,
+        });
+    }
+    if let (Some(&last), Some(&rest)) = (a.last(), b.get(most)) {
+        let mut p = Provenance::new(ProvenanceSource::Knowledge, RULE_CARRIED)
+            .with_value("first", f64::from(c.first.0))
+            .with_value("second", f64::from(c.second.0))
+            .with_value("standing_first", most as f64);
+        p.note = format!(
+            "{} before {} ({}): the last feature of the first before the second's features below \
+             the shank's reach ({most} of the second's come earlier: {RULE_CARRIED_SHANK})",
+            c.first, c.second, c.provenance.rule
+        );
+        edges.push(Constraint {
+            first: last,
+            second: rest,
+            kind: ConstraintKind::Before,
+            priority: c.priority,
+            provenance: p,
+        });
+    }
+    if closes_cycle(out.features.len(), &out.constraints, &edges) {
+        out.warnings.push(format!(
+            "{} before {} ({}): a shank would rub the second's upper features, but letting them \
+             go first would close a cycle; the whole first goes before the second",
+            c.first, c.second, c.provenance.rule
+        ));
+        return None;
+    }
+    Some(edges)
+}
+
+/// A stage-5 feature's extent in the set-up: along the up axis, and its
+/// box in the plane across it. Stage 5's wall features are prisms in their
+/// wall's frame, so the plan-view comparison of later stages does not apply.
+struct Extent {
+    lo: f64,
+    hi: f64,
+    across: [f64; 4],
+}
+
+impl Extent {
+    fn of(f: &MachiningFeature, up: DVec3) -> Self {
+        let (e1, e2) = up.any_orthonormal_pair();
+        let fr = &f.shape.frame;
+        let y = fr.z.cross(fr.x);
+        let mut e = Extent {
+            lo: f64::INFINITY,
+            hi: f64::NEG_INFINITY,
+            across: [
+                f64::INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+            ],
+        };
+        for v in &f.shape.region.outer.vertices {
+            for z in [f.shape.z_min, f.shape.z_max] {
+                let p = fr.origin + fr.x * v.x + y * v.y + fr.z * z;
+                let (h, u, w) = (p.dot(up), p.dot(e1), p.dot(e2));
+                e.lo = e.lo.min(h);
+                e.hi = e.hi.max(h);
+                e.across = [
+                    e.across[0].min(u),
+                    e.across[1].min(w),
+                    e.across[2].max(u),
+                    e.across[3].max(w),
+                ];
+            }
+        }
+        e
+    }
+
+    /// As `MachiningFeature::shank_neighbour`: `g` within `margin` across
+    /// and higher than `rise` above this one's bottom.
+    fn shank_neighbour(&self, g: &Extent, margin: f64, rise: f64) -> bool {
+        let (a, b) = (self.across, g.across);
+        g.hi > self.lo + rise
+            && b[0] <= a[2] + margin
+            && a[0] <= b[2] + margin
+            && b[1] <= a[3] + margin
+            && a[1] <= b[3] + margin
+    }
+}
+
+/// Whether `existing` plus `added` (`Before` constraints between `n`
+/// features) has a cycle.
+fn closes_cycle(
+    n: usize,
+    existing: &[Constraint<MachiningFeatureId>],
+    added: &[Constraint<MachiningFeatureId>],
+) -> bool {
+    let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut indeg = vec![0usize; n];
+    for c in existing.iter().chain(added) {
+        let (x, y) = (c.first.0 as usize, c.second.0 as usize);
+        if c.kind == ConstraintKind::Before && x < n && y < n {
+            succ[x].push(y);
+            indeg[y] += 1;
+        }
+    }
+    let mut ready: Vec<usize> = (0..n).filter(|&i| indeg[i] == 0).collect();
+    let mut seen = 0;
+    while let Some(v) = ready.pop() {
+        seen += 1;
+        for &w in &succ[v] {
+            indeg[w] -= 1;
+            if indeg[w] == 0 {
+                ready.push(w);
+            }
+        }
+    }
+    seen < n
 }
 
 pub mod web;

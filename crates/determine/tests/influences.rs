@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use glam::DVec3;
 use thinplan_brep::{Brep, Surface};
-use thinplan_determine::{determine, prism_points, Determination};
+use thinplan_determine::{determine, prism_points, Determination, RULE_CARRIED_SHANK};
 use thinplan_knowledge::{Block, Knowledge};
 use thinplan_plan::{
     MachiningFeature, MachiningFeatureId, Plan, Provenance, ProvenanceSource, Setup, Stage,
@@ -404,4 +404,92 @@ fn a_flanges_features_are_no_wider_than_the_webs_permissible_height() {
         assert_eq!(local > 0, factor < 1.0, "{name} ×{factor}");
         println!("{name} ×{factor}: {checked} flange features checked, {local} capped at the foot");
     }
+}
+
+/// "A flange before the wall it is on" (§4.2.2) carried over to the
+/// machining features, on flange_web_slot (a 35 mm flange on its web): the
+/// web's face-milling layers that stand higher than the tool set's shortest
+/// flute above a flange feature's bottom go before it (a shank cutting the
+/// flange's narrow steps would rub them: issue 5's shank collisions), every
+/// other web layer after it, so the two interleave top-down. Without the
+/// knowledge's `shank_access` the whole flange goes first.
+#[test]
+fn a_flange_precedes_its_web_except_the_layers_a_shank_would_rub() {
+    let k = Knowledge::builtin().unwrap();
+    let (plan, _, d) = planned("flange_web_slot", &k);
+    let rise = k
+        .tool_set(&plan.setup.tool_set)
+        .unwrap()
+        .tools
+        .iter()
+        .map(|t| t.flute_length)
+        .fold(f64::INFINITY, f64::min);
+    let role = |f: &MachiningFeature| {
+        plan.stiffness_features
+            .iter()
+            .find(|s| s.id == f.owner)
+            .unwrap()
+            .role
+    };
+    let of = |d: &Determination, r: WallRole| -> Vec<MachiningFeature> {
+        d.features
+            .iter()
+            .filter(|f| role(f) == Some(r))
+            .cloned()
+            .collect()
+    };
+    let (flange, web) = (of(&d, WallRole::Flange), of(&d, WallRole::Web));
+    assert!(
+        flange.len() >= 2 && web.len() >= 3,
+        "{} {}",
+        flange.len(),
+        web.len()
+    );
+    let (mut early, mut late) = (0, 0);
+    for f in &flange {
+        let f_bottom = z_span(f).0;
+        for w in &web {
+            // Every web layer spans the web beside the flange: only the
+            // height decides.
+            if z_span(w).1 > f_bottom + rise + 1e-9 {
+                assert!(precedes(&d, w.id, f.id), "{} before {}", w.id, f.id);
+                early += 1;
+            } else {
+                assert!(precedes(&d, f.id, w.id), "{} before {}", f.id, w.id);
+                late += 1;
+            }
+        }
+    }
+    println!("{early} web layers early, {late} after the flange feature");
+    assert!(early > 0 && late > 0);
+    let yielded: Vec<_> = d
+        .constraints
+        .iter()
+        .filter(|c| c.provenance.rule == RULE_CARRIED_SHANK)
+        .collect();
+    assert!(!yielded.is_empty());
+    for c in yielded {
+        assert_eq!(c.provenance.values["flute_length"], rise);
+        let (w, f) = (
+            &d.features[c.first.0 as usize],
+            &d.features[c.second.0 as usize],
+        );
+        assert_eq!(role(w), Some(WallRole::Web));
+        assert_eq!(role(f), Some(WallRole::Flange));
+        assert!(z_span(w).1 > z_span(f).0 + rise);
+    }
+
+    let mut off = k.clone();
+    off.interference.shank_access = false;
+    let (_, _, d2) = planned("flange_web_slot", &off);
+    let (flange, web) = (of(&d2, WallRole::Flange), of(&d2, WallRole::Web));
+    for f in &flange {
+        for w in &web {
+            assert!(precedes(&d2, f.id, w.id), "{} before {}", f.id, w.id);
+        }
+    }
+    assert!(!d2
+        .constraints
+        .iter()
+        .any(|c| c.provenance.rule == RULE_CARRIED_SHANK));
 }

@@ -95,6 +95,22 @@ pub struct ToolSet {
     pub tools: Vec<Tool>,
 }
 
+impl ToolSet {
+    /// The set's reach and shortest flute: (largest diameter, shortest flute
+    /// length), or `None` for an empty set. Shank rules use the pair: a
+    /// neighbour within the reach, higher than the shortest flute above a
+    /// feature's bottom, may meet some tool's shank.
+    pub fn reach_and_rise(&self) -> Option<(f64, f64)> {
+        let d = self.tools.iter().map(|t| t.diameter).fold(0.0, f64::max);
+        let flute = self
+            .tools
+            .iter()
+            .map(|t| t.flute_length)
+            .fold(f64::INFINITY, f64::min);
+        (d > 0.0 && flute.is_finite()).then_some((d, flute))
+    }
+}
+
 /// Cutting data for a material with one tool kind.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

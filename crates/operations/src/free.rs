@@ -13,8 +13,6 @@ use i_overlay::core::overlay_rule::OverlayRule;
 use i_overlay::float::single::SingleFloatOverlay;
 use thinplan_plan::{MachiningFeature, Plan, ProfileLoop};
 
-use crate::precedence::{bbox, same_frame};
-
 /// Shapes: each an outer contour then holes.
 pub(crate) type Shapes = Vec<Vec<Vec<[f64; 2]>>>;
 
@@ -65,9 +63,9 @@ pub(crate) fn removed_space(plan: &Plan, i: usize, margin: f64, pos: &[usize]) -
 fn space(plan: &Plan, i: usize, margin: f64, include: impl Fn(usize) -> bool) -> Option<Shapes> {
     let blank = blank_rect(plan)?;
     let f = &plan.machining_features[i];
-    let fb = bbox(f);
+    let fb = f.plan_box();
     let near = |g: &MachiningFeature| {
-        let b = bbox(g);
+        let b = g.plan_box();
         b[0] <= fb[2] + margin
             && fb[0] <= b[2] + margin
             && b[1] <= fb[3] + margin
@@ -80,7 +78,7 @@ fn space(plan: &Plan, i: usize, margin: f64, include: impl Fn(usize) -> bool) ->
         if j == i || !near(g) {
             continue;
         }
-        if !same_frame(f, g) {
+        if !f.same_frame(g) {
             return None;
         }
         if g.shape.z_max > lo + eps && g.shape.z_min < hi - eps && include(j) {
@@ -240,7 +238,7 @@ pub(crate) fn shank_obstacles(
     }
     let mut out = Vec::new();
     for (j, g) in plan.machining_features.iter().enumerate() {
-        if j == i || before[j] || !crate::precedence::shank_neighbour(f, g, margin, rise) {
+        if j == i || before[j] || !f.shank_neighbour(g, margin, rise) {
             continue;
         }
         out.push(Obstacle {

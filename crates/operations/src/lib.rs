@@ -158,7 +158,7 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         warnings: Vec::new(),
         refusals: Vec::new(),
     };
-    let (d_max, min_flute) = precedence::reach_and_rise(tools).unwrap_or((0.0, f64::INFINITY));
+    let (d_max, min_flute) = tools.reach_and_rise().unwrap_or((0.0, f64::INFINITY));
     let positions = precedence::machining_positions(plan);
     // How far a feature no tool fits alone may be reached from beside it:
     // the smallest tool's diameter times the largest overhang the method

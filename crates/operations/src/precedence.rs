@@ -55,58 +55,6 @@ pub(crate) fn machining_positions(plan: &Plan) -> Vec<usize> {
     pos
 }
 
-/// A feature's plan-view box (outer loop vertices; arcs as chords).
-pub(crate) fn bbox(f: &MachiningFeature) -> [f64; 4] {
-    let mut b = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    for v in &f.shape.region.outer.vertices {
-        b[0] = b[0].min(v.x);
-        b[1] = b[1].min(v.y);
-        b[2] = b[2].max(v.x);
-        b[3] = b[3].max(v.y);
-    }
-    b
-}
-
-/// Whether two features share one frame (their plan-view coordinates compare).
-pub(crate) fn same_frame(a: &MachiningFeature, b: &MachiningFeature) -> bool {
-    let (fa, fb) = (&a.shape.frame, &b.shape.frame);
-    (fa.origin - fb.origin).length() < 1e-9
-        && (fa.x - fb.x).length() < 1e-9
-        && (fa.z - fb.z).length() < 1e-9
-}
-
-/// Whether `g` stands within `margin` of `f` in plan view (same frame) and
-/// higher than `rise` above `f`'s bottom: a shank may meet it.
-pub(crate) fn shank_neighbour(
-    f: &MachiningFeature,
-    g: &MachiningFeature,
-    margin: f64,
-    rise: f64,
-) -> bool {
-    if !same_frame(f, g) || g.shape.z_max <= f.shape.z_min + rise {
-        return false;
-    }
-    let (a, b) = (bbox(f), bbox(g));
-    b[0] <= a[2] + margin && a[0] <= b[2] + margin && b[1] <= a[3] + margin && a[1] <= b[3] + margin
-}
-
-/// The reach and the shortest flute of a tool set: (largest diameter,
-/// shortest flute length), or `None` for an empty set.
-pub(crate) fn reach_and_rise(tools: &thinplan_knowledge::ToolSet) -> Option<(f64, f64)> {
-    let d = tools.tools.iter().map(|t| t.diameter).fold(0.0, f64::max);
-    let flute = tools
-        .tools
-        .iter()
-        .map(|t| t.flute_length)
-        .fold(f64::INFINITY, f64::min);
-    (d > 0.0 && flute.is_finite()).then_some((d, flute))
-}
-
 /// `Before` edges (first, second) for every taller neighbour that comes
 /// earlier in the machining order than a feature it stands beside, except
 /// where the edge would close a cycle between stage 8's groups (features
@@ -116,7 +64,7 @@ pub fn shank_edges(
     margin: f64,
     rise: f64,
 ) -> Vec<(MachiningFeatureId, MachiningFeatureId)> {
-    forward_edges(plan, |fi, fj| shank_neighbour(fi, fj, margin, rise))
+    forward_edges(plan, |fi, fj| fi.shank_neighbour(fj, margin, rise))
 }
 
 /// Stage 8's extra `Before` edges: the shank edges, and an edge from every
@@ -129,12 +77,12 @@ pub fn stage8_edges(
     let Some(tools) = k.tool_set(&plan.setup.tool_set) else {
         return Vec::new();
     };
-    let Some((margin, rise)) = reach_and_rise(tools) else {
+    let Some((margin, rise)) = tools.reach_and_rise() else {
         return Vec::new();
     };
     let cuts = cutting_pairs(plan, tools);
     forward_edges(plan, |fi, fj| {
-        shank_neighbour(fi, fj, margin, rise) || cuts.contains(&(fi.id, fj.id))
+        fi.shank_neighbour(fj, margin, rise) || cuts.contains(&(fi.id, fj.id))
     })
 }
 
@@ -240,7 +188,7 @@ pub fn cutting_pairs(
 ) -> BTreeSet<(MachiningFeatureId, MachiningFeatureId)> {
     use glam::{DVec2, DVec3};
     let feats = &plan.machining_features;
-    let boxes: Vec<[f64; 4]> = feats.iter().map(bbox).collect();
+    let boxes: Vec<[f64; 4]> = feats.iter().map(|f| f.plan_box()).collect();
     let rings: Vec<Vec<Vec<DVec2>>> = feats
         .iter()
         .map(|f| {
@@ -334,7 +282,7 @@ pub fn cutting_pairs(
                 || sb[0] > b[2] + r
                 || b[1] > sb[3] + r
                 || sb[1] > b[3] + r
-                || !same_frame(fi, fj)
+                || !fi.same_frame(fj)
             {
                 continue;
             }

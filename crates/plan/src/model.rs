@@ -356,6 +356,49 @@ pub struct MachiningFeature {
     pub provenance: Provenance,
 }
 
+impl MachiningFeature {
+    /// The plan-view box [x0, y0, x1, y1] of the outer loop's vertices
+    /// (arcs as chords).
+    pub fn plan_box(&self) -> [f64; 4] {
+        let mut b = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for v in &self.shape.region.outer.vertices {
+            b[0] = b[0].min(v.x);
+            b[1] = b[1].min(v.y);
+            b[2] = b[2].max(v.x);
+            b[3] = b[3].max(v.y);
+        }
+        b
+    }
+
+    /// Whether two features share one frame (their plan-view coordinates
+    /// compare).
+    pub fn same_frame(&self, other: &MachiningFeature) -> bool {
+        let (fa, fb) = (&self.shape.frame, &other.shape.frame);
+        (fa.origin - fb.origin).length() < 1e-9
+            && (fa.x - fb.x).length() < 1e-9
+            && (fa.z - fb.z).length() < 1e-9
+    }
+
+    /// Whether `g` stands within `margin` of this feature in plan view (same
+    /// frame, boxes compared) and higher than `rise` above its bottom: the
+    /// shank of a tool with flutes `rise` long cutting here may meet it.
+    pub fn shank_neighbour(&self, g: &MachiningFeature, margin: f64, rise: f64) -> bool {
+        if !self.same_frame(g) || g.shape.z_max <= self.shape.z_min + rise {
+            return false;
+        }
+        let (a, b) = (self.plan_box(), g.plan_box());
+        b[0] <= a[2] + margin
+            && a[0] <= b[2] + margin
+            && b[1] <= a[3] + margin
+            && a[1] <= b[3] + margin
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Region3 {
