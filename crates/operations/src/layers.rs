@@ -732,8 +732,18 @@ fn boundary_pass(
 /// `progress` (±dir.perp()), at most `spacing` apart, reaching both extremes.
 /// Zigzag blocks (connected where a straight step-over stays inside), or one
 /// pass per block for one-way (travel `oneway_dir`).
+/// Parallel lines across the tool-centre region `polys`, `spacing` apart at
+/// most, joined into zigzag blocks (or one-way lines). `cover` is the
+/// feature region and the tool radius: past an open edge the centre region
+/// reaches a radius beyond the feature, where a line's disc only grazes
+/// what the line before it cut, so the first and last lines engage at most
+/// `spacing` (one line down the middle of a feature no wider than the
+/// stepover and the tool). Issue 5: with the web layers above gone first, the
+/// flange's cut-out slabs had every edge open and three times the lines.
+#[allow(clippy::too_many_arguments)]
 fn parallel_blocks(
     polys: &[Vec<DVec2>],
+    cover: (&[Vec<DVec2>], f64),
     dir: DVec2,
     progress: DVec2,
     spacing: f64,
@@ -760,7 +770,32 @@ fn parallel_blocks(
         return (Vec::new(), 0);
     }
     let eps = 1e-4;
-    let (lo, hi) = (vmin + eps, vmax - eps);
+    let (mut lo, mut hi) = (vmin + eps, vmax - eps);
+    let (region, r) = cover;
+    let (mut cmin, mut cmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    for q in region.iter().flatten() {
+        let v = to_uv(*q).y;
+        cmin = cmin.min(v);
+        cmax = cmax.max(v);
+    }
+    if cmin.is_finite() {
+        // One line covers a feature no wider than the stepover and the
+        // tool; else the first line (either way: layers may be mirrored)
+        // engages at most the stepover.
+        let (a, b) = if cmax - cmin <= spacing.min(2.0 * r) {
+            let mid = 0.5 * (cmin + cmax);
+            (mid, mid)
+        } else {
+            (cmin - r + spacing, cmax + r - spacing)
+        };
+        let (a, b) = (lo.max(a), hi.min(b));
+        if a <= b {
+            (lo, hi) = (a, b);
+        } else {
+            let mid = (0.5 * (cmin + cmax)).max(lo).min(hi);
+            (lo, hi) = (mid, mid);
+        }
+    }
     let span = (hi - lo).max(0.0);
     let mut n = if span < 1e-9 {
         1
@@ -1469,8 +1504,16 @@ fn plan_band(
         let mut best: Option<(f64, usize, RestPlan)> = None;
         for extra in [false, true] {
             for high in [false, true] {
-                let (blocks, n) =
-                    parallel_blocks(&rest_polys, dir, progress, spacing, extra, high, oneway);
+                let (blocks, n) = parallel_blocks(
+                    &rest_polys,
+                    (&g.region_polys, g.r),
+                    dir,
+                    progress,
+                    spacing,
+                    extra,
+                    high,
+                    oneway,
+                );
                 if blocks.is_empty() {
                     continue;
                 }
@@ -1697,7 +1740,17 @@ fn plan_band(
             spiral_rest(f, &mm, &g, d, so, s_b, false, &mut bnotes)?.blocks
         } else {
             let oneway = (bl.pattern == Pattern::OneWay).then_some(oneway_dir);
-            parallel_blocks(&rest_polys, dir, progress, so, false, false, oneway).0
+            parallel_blocks(
+                &rest_polys,
+                (&g.region_polys, g.r),
+                dir,
+                progress,
+                so,
+                false,
+                false,
+                oneway,
+            )
+            .0
         };
         for block in &blocks {
             if block.len() < 2 {

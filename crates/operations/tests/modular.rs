@@ -395,3 +395,41 @@ fn a_plan_without_resolve_is_an_error() {
         .retain(|s| *s != thinplan_plan::Stage::Resolve);
     assert!(operations(&plan, &k).is_err());
 }
+
+/// A strip narrower than the tool with every edge open: the centre region
+/// reaches a radius past each long side, but one line down the middle clears
+/// the strip (every point within r of it); lines farther out would only
+/// graze what it cut. Issue 5: with all edges open the flange's cut-out
+/// slabs got three times the lines they needed.
+#[test]
+fn a_narrow_open_strip_is_cleared_by_one_line_down_its_middle() {
+    let strip = feature(
+        0,
+        vec![v(0.0, 0.0), v(80.0, 0.0), v(80.0, 8.0), v(0.0, 8.0)],
+        vec![],
+        vec![Adjacency::Open; 4],
+        Adjacency::Open,
+        (0.0, 3.0),
+    );
+    let (f, ops, k) = run(strip);
+    check_no_plunge(&ops, 3.0);
+    let mut lines = 0;
+    for op in &ops.operations {
+        let r = radius(&k, op);
+        assert!(r > 4.0, "the tool (r {r}) is wider than the strip");
+        let mut from = op.start;
+        for m in &op.moves {
+            let flat = (from.z - m.to.z).abs() < 1e-9 && m.arc.is_none();
+            let d = m.to.truncate() - from.truncate();
+            if flat && is_cutting(m.region) && d.x.abs() > 40.0 {
+                lines += 1;
+                // Along the strip, on its middle.
+                assert!(d.y.abs() < 1e-6, "{from} -> {}", m.to);
+                assert!((m.to.y - 4.0).abs() < 1e-6, "line at y {}", m.to.y);
+            }
+            from = m.to;
+        }
+    }
+    assert!(lines >= 1);
+    check_product_and_floor(&f, &ops, &k);
+}
