@@ -488,3 +488,125 @@ pub fn oriented(mut p: Polyline<f64>, ccw: bool) -> Polyline<f64> {
     }
     p
 }
+
+/// Edges bucketed on a uniform grid by their box grown by `reach`: every
+/// edge within `reach` of a point is among the point's cell's candidates
+/// (the safety net asks that of every sampled tool centre, and a feature's
+/// free-space boundary can have thousands of edges).
+pub struct EdgeGrid {
+    origin: DVec2,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl EdgeGrid {
+    pub fn new(edges: &[Edge2], reach: f64) -> Self {
+        let boxes: Vec<(DVec2, DVec2)> = edges
+            .iter()
+            .map(|e| {
+                let (mut lo, mut hi) = (e.a.min(e.b), e.a.max(e.b));
+                if let Some((r, c)) = e.arc() {
+                    // The whole circle: conservative and enough.
+                    lo = lo.min(c - DVec2::splat(r));
+                    hi = hi.max(c + DVec2::splat(r));
+                }
+                (lo - DVec2::splat(reach), hi + DVec2::splat(reach))
+            })
+            .collect();
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        for (a, b) in &boxes {
+            lo = lo.min(*a);
+            hi = hi.max(*b);
+        }
+        if !lo.is_finite() || !hi.is_finite() {
+            return EdgeGrid {
+                origin: DVec2::ZERO,
+                cell: 1.0,
+                nx: 0,
+                ny: 0,
+                cells: Vec::new(),
+            };
+        }
+        let ext = (hi - lo).max(DVec2::splat(1e-9));
+        // About as many cells as edges, at most 256 a side.
+        let target = (edges.len() as f64).sqrt().clamp(1.0, 256.0);
+        let cell = (ext.x.max(ext.y) / target).max(1e-6);
+        let nx = ((ext.x / cell).ceil() as usize).clamp(1, 256);
+        let ny = ((ext.y / cell).ceil() as usize).clamp(1, 256);
+        let cell = (ext.x / nx as f64).max(ext.y / ny as f64);
+        let mut cells = vec![Vec::new(); nx * ny];
+        let idx =
+            |v: f64, o: f64, n: usize| (((v - o) / cell).floor().max(0.0) as usize).min(n - 1);
+        for (k, (a, b)) in boxes.iter().enumerate() {
+            for j in idx(a.y, lo.y, ny)..=idx(b.y, lo.y, ny) {
+                for i in idx(a.x, lo.x, nx)..=idx(b.x, lo.x, nx) {
+                    cells[j * nx + i].push(k as u32);
+                }
+            }
+        }
+        EdgeGrid {
+            origin: lo,
+            cell,
+            nx,
+            ny,
+            cells,
+        }
+    }
+
+    /// Indices of the edges whose grown box may hold `p` (none outside the
+    /// grid).
+    pub fn candidates(&self, p: DVec2) -> &[u32] {
+        let q = (p - self.origin) / self.cell;
+        if self.nx == 0 || !(q.x >= 0.0 && q.y >= 0.0) {
+            return &[];
+        }
+        let (i, j) = (q.x.floor() as usize, q.y.floor() as usize);
+        if i >= self.nx || j >= self.ny {
+            return &[];
+        }
+        &self.cells[j * self.nx + i]
+    }
+}
+
+#[cfg(test)]
+mod edge_grid_tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Every edge nearer than the reach to a point is among its
+        /// candidates (lines and arcs, points inside and outside the grid).
+        #[test]
+        fn candidates_hold_every_edge_within_reach(
+            es in prop::collection::vec(
+                ((-50.0f64..50.0, -50.0f64..50.0), (-50.0f64..50.0, -50.0f64..50.0), -1.5f64..1.5),
+                1..30,
+            ),
+            reach in 0.5f64..15.0,
+            queries in prop::collection::vec((-80.0f64..80.0, -80.0f64..80.0), 1..40),
+        ) {
+            let edges: Vec<Edge2> = es
+                .iter()
+                .map(|&((ax, ay), (bx, by), bulge)| Edge2 {
+                    a: DVec2::new(ax, ay),
+                    b: DVec2::new(bx, by),
+                    bulge: if bulge.abs() < 0.3 { 0.0 } else { bulge },
+                })
+                .filter(|e| e.a.distance(e.b) > 1e-3)
+                .collect();
+            let grid = EdgeGrid::new(&edges, reach);
+            for &(x, y) in &queries {
+                let p = DVec2::new(x, y);
+                let cand = grid.candidates(p);
+                for (k, e) in edges.iter().enumerate() {
+                    if e.distance(p) < reach {
+                        prop_assert!(cand.contains(&(k as u32)), "edge {k} at {} from {p}", e.distance(p));
+                    }
+                }
+            }
+        }
+    }
+}

@@ -2430,6 +2430,17 @@ fn check(
     z_top: f64,
     f: &MachiningFeature,
 ) -> Result<(), String> {
+    // Only edges within r of a centre can fail it: bucketed once.
+    let grids = (
+        crate::geom::EdgeGrid::new(&g.product, g.r),
+        crate::geom::EdgeGrid::new(&g.keep_out, g.r),
+    );
+    let near = |p: DVec2, edges: &[Edge2], grid: &crate::geom::EdgeGrid| {
+        grid.candidates(p)
+            .iter()
+            .map(|&k| edges[k as usize].distance(p))
+            .fold(f64::INFINITY, f64::min)
+    };
     let mut from = b.start;
     for mv in &b.moves {
         if mv.kind == Kind::Rapid {
@@ -2462,8 +2473,8 @@ fn check(
             if p.z < z_min - 1e-9 {
                 return Err(format!("a move goes below the floor at z {:.4}", p.z));
             }
-            let own = product_distance(p.truncate(), &g.product);
-            let other = product_distance(p.truncate(), &g.keep_out);
+            let own = near(p.truncate(), &g.product, &grids.0);
+            let other = near(p.truncate(), &g.keep_out, &grids.1);
             let dist = own.min(other);
             if dist < g.r - EPS {
                 let which = if own <= other {

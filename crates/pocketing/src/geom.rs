@@ -199,30 +199,33 @@ impl SegIndex {
         // distance from p to the grid box, to start rings sensibly when p lies outside
         let mut best = f64::INFINITY;
         let maxr = self.nx.max(self.ny);
-        for r in 0..=maxr {
-            let i0 = ci as isize - r as isize;
-            let i1 = ci as isize + r as isize;
-            let j0 = cj as isize - r as isize;
-            let j1 = cj as isize + r as isize;
-            for j in j0..=j1 {
-                if j < 0 || j >= self.ny as isize {
-                    continue;
+        let visit = |i: isize, j: isize, best: &mut f64| {
+            if i < 0 || j < 0 || i >= self.nx as isize || j >= self.ny as isize {
+                return;
+            }
+            for &k in &self.cells[j as usize * self.nx + i as usize] {
+                let (a, b) = self.segs[k as usize];
+                let d = dist_point_seg(p, a, b);
+                if d < *best {
+                    *best = d;
                 }
-                for i in i0..=i1 {
-                    if i < 0 || i >= self.nx as isize {
-                        continue;
-                    }
-                    let on_ring = i == i0 || i == i1 || j == j0 || j == j1;
-                    if !on_ring {
-                        continue;
-                    }
-                    for &k in &self.cells[j as usize * self.nx + i as usize] {
-                        let (a, b) = self.segs[k as usize];
-                        let d = dist_point_seg(p, a, b);
-                        if d < best {
-                            best = d;
-                        }
-                    }
+            }
+        };
+        for r in 0..=maxr {
+            let (ci, cj, ri) = (ci as isize, cj as isize, r as isize);
+            // The ring of cells at Chebyshev distance r only (the square's
+            // inside was visited by the smaller rings).
+            if r == 0 {
+                visit(ci, cj, &mut best);
+            } else {
+                let (nx, ny) = (self.nx as isize, self.ny as isize);
+                for i in (ci - ri).max(0)..=(ci + ri).min(nx - 1) {
+                    visit(i, cj - ri, &mut best);
+                    visit(i, cj + ri, &mut best);
+                }
+                for j in (cj - ri + 1).max(0)..(cj + ri).min(ny) {
+                    visit(ci - ri, j, &mut best);
+                    visit(ci + ri, j, &mut best);
                 }
             }
             // every cell not yet visited is at least r*cell away from p, and every segment is at
@@ -262,4 +265,33 @@ pub fn pline_from_points(pts: &[DVec2], closed: bool) -> Polyline<f64> {
         pl.add(p.x, p.y, 0.0);
     }
     pl
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The grid's ring search finds the same distance as trying every
+        /// segment, for points inside and outside the indexed box.
+        #[test]
+        fn nearest_equals_brute_force(
+            pts in prop::collection::vec((-50.0f64..50.0, -50.0f64..50.0), 2..40),
+            queries in prop::collection::vec((-120.0f64..120.0, -120.0f64..120.0), 1..20),
+            closed in any::<bool>(),
+        ) {
+            let poly: Vec<DVec2> = pts.iter().map(|&(x, y)| DVec2::new(x, y)).collect();
+            let idx = SegIndex::new(&[&poly], closed);
+            let n = poly.len();
+            let m = if closed { n } else { n - 1 };
+            for &(x, y) in &queries {
+                let p = DVec2::new(x, y);
+                let brute = (0..m)
+                    .map(|i| dist_point_seg(p, poly[i], poly[(i + 1) % n]))
+                    .fold(f64::INFINITY, f64::min);
+                prop_assert_eq!(idx.nearest(p), brute);
+            }
+        }
+    }
 }
