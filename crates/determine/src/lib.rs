@@ -861,13 +861,16 @@ fn yield_to_shanks(
 ) -> Option<Vec<Constraint<MachiningFeatureId>>> {
     let feature = |id: MachiningFeatureId| &out.features[id.0 as usize];
     let up = up.normalize_or_zero();
-    let extent = |id: MachiningFeatureId| Extent::of(feature(id), up);
-    let needs: Vec<usize> = a
+    let (ext_a, ext_b): (Vec<Extent>, Vec<Extent>) = (
+        a.iter().map(|&id| Extent::of(feature(id), up)).collect(),
+        b.iter().map(|&id| Extent::of(feature(id), up)).collect(),
+    );
+    let needs: Vec<usize> = ext_a
         .iter()
-        .map(|&ai| {
-            let ea = extent(ai);
-            b.iter()
-                .rposition(|&bj| ea.shank_neighbour(&extent(bj), reach, rise))
+        .map(|ea| {
+            ext_b
+                .iter()
+                .rposition(|eb| ea.shank_neighbour(eb, reach, rise))
                 .map_or(0, |j| j + 1)
         })
         .collect();
@@ -876,9 +879,14 @@ fn yield_to_shanks(
         return None;
     }
     let mut edges = Vec::new();
-    for (&ai, &need) in a.iter().zip(&needs).filter(|(_, n)| **n > 0) {
+    for (i, (&ai, &need)) in a
+        .iter()
+        .zip(&needs)
+        .enumerate()
+        .filter(|(_, (_, n))| **n > 0)
+    {
         let bj = b[need - 1];
-        let (fa, fb) = (extent(ai), extent(bj));
+        let (fa, fb) = (&ext_a[i], &ext_b[need - 1]);
         let mut p = Provenance::new(ProvenanceSource::Knowledge, RULE_CARRIED_SHANK)
             .with_value("first", f64::from(c.first.0))
             .with_value("second", f64::from(c.second.0))
