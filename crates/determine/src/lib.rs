@@ -598,12 +598,21 @@ fn wall_steps(
     let (mut i_large, mut i_small) = (0, 0);
     insert_due(ctx, sf, g, &eff, &after, None, &chain, &mut pending, out);
     for (i, st) in steps.iter().enumerate() {
+        // The model's deflection for the sizes this step uses (an influence
+        // may have changed them from the wall's own).
+        let step_sizes = thinplan_sizing::Sizes {
+            b_rf: st.sz.b_rf,
+            h: st.sz.h,
+            big_h: st.sz.big_h,
+        };
+        let delta =
+            thinplan_sizing::deflection(&wall, &step_sizes, &ctx.k.sizing, ctx.e_modulus, mode);
         let values = |mut p: Provenance| {
             p = p
                 .with_value("b_rf", st.sz.b_rf)
                 .with_value("h", st.sz.h)
                 .with_value("big_h", st.sz.big_h)
-                .with_value("deflection", sizes.deflection)
+                .with_value("deflection", delta)
                 .with_value("allowed_deflection", ctx.k.sizing.allowed_deflection);
             for (k, v) in &break_values {
                 p = p.with_value(*k, *v);
@@ -1025,27 +1034,12 @@ fn closes_cycle(
     existing: &[Constraint<MachiningFeatureId>],
     added: &[Constraint<MachiningFeatureId>],
 ) -> bool {
-    let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
-    let mut indeg = vec![0usize; n];
-    for c in existing.iter().chain(added) {
-        let (x, y) = (c.first.0 as usize, c.second.0 as usize);
-        if c.kind == ConstraintKind::Before && x < n && y < n {
-            succ[x].push(y);
-            indeg[y] += 1;
-        }
-    }
-    let mut ready: Vec<usize> = (0..n).filter(|&i| indeg[i] == 0).collect();
-    let mut seen = 0;
-    while let Some(v) = ready.pop() {
-        seen += 1;
-        for &w in &succ[v] {
-            indeg[w] -= 1;
-            if indeg[w] == 0 {
-                ready.push(w);
-            }
-        }
-    }
-    seen < n
+    let edges = existing
+        .iter()
+        .chain(added)
+        .filter(|c| c.kind == ConstraintKind::Before)
+        .map(|c| (c.first.0 as usize, c.second.0 as usize));
+    thinplan_plan::topological_order(n, edges).len() < n
 }
 
 pub mod web;

@@ -3,33 +3,16 @@
 //! that exposes it, or before all of the wall's features when large.
 //! Heights are measured from the features' prisms, not their provenance.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet};
 
-use glam::DVec3;
-use thinplan_determine::{determine, prism_points, Determination};
+use thinplan_determine::{prism_points, Determination};
 use thinplan_knowledge::{Block, Knowledge};
-use thinplan_plan::{
-    MachiningFeature, MachiningFeatureId, Plan, Provenance, ProvenanceSource, Setup, Stage,
-    StiffnessKind, WallRole,
-};
+use thinplan_plan::{MachiningFeature, MachiningFeatureId, Plan, StiffnessKind, WallRole};
 
 fn planned(k: &Knowledge) -> (Plan, Determination) {
-    let imported = thinplan_import::import("builtin:chamfered_rib").expect("imports");
-    let setup = Setup {
-        up: DVec3::Z,
-        machine: thinplan_knowledge::DEFAULT_MACHINE.into(),
-        tool_set: thinplan_knowledge::DEFAULT_TOOL_SET.into(),
-        material: thinplan_knowledge::DEFAULT_MATERIAL.into(),
-        provenance: Provenance::new(ProvenanceSource::Default, "test"),
-    };
-    let mut plan = Plan::new(imported.part, setup);
-    let machine = k.machine(&plan.setup.machine).unwrap();
-    let r = thinplan_recognise::recognise(&imported.brep, plan.setup.up, k, machine);
-    plan.stiffness_features = r.features;
-    plan.connections = r.connections;
-    plan.stages_done.extend([Stage::Recognise, Stage::Connect]);
-    thinplan_sequence::run(&plan, k).apply_to(&mut plan);
-    let d = determine(&plan, &imported.brep, k).expect("determines");
+    let (plan, _, d) = common::planned("chamfered_rib", k);
     (plan, d)
 }
 

@@ -2,82 +2,16 @@
 //! (figure 4.8), cut-outs (figure 4.7) and connected walls (figure 4.6), on
 //! the sample parts, measured from the part's own geometry.
 
-use std::collections::{BTreeMap, BTreeSet};
+mod common;
 
-use glam::DVec3;
-use thinplan_brep::{Brep, Surface};
-use thinplan_determine::{determine, prism_points, Determination, RULE_CARRIED_SHANK};
+use std::collections::BTreeSet;
+
+use common::*;
+use thinplan_brep::Surface;
+use thinplan_determine::{Determination, RULE_CARRIED_SHANK};
 use thinplan_knowledge::{Block, Knowledge};
-use thinplan_plan::{
-    MachiningFeature, MachiningFeatureId, Plan, Provenance, ProvenanceSource, Setup, Stage,
-    StiffnessKind, WallRole,
-};
+use thinplan_plan::{MachiningFeature, StiffnessKind, WallRole};
 use thinplan_sizing::{MillingMode, Wall};
-
-fn planned(name: &str, k: &Knowledge) -> (Plan, Brep, Determination) {
-    let imported = thinplan_import::import(&format!("builtin:{name}")).expect("imports");
-    let setup = Setup {
-        up: DVec3::Z,
-        machine: thinplan_knowledge::DEFAULT_MACHINE.into(),
-        tool_set: thinplan_knowledge::DEFAULT_TOOL_SET.into(),
-        material: thinplan_knowledge::DEFAULT_MATERIAL.into(),
-        provenance: Provenance::new(ProvenanceSource::Default, "test"),
-    };
-    let mut plan = Plan::new(imported.part, setup);
-    let machine = k.machine(&plan.setup.machine).unwrap();
-    let r = thinplan_recognise::recognise(&imported.brep, plan.setup.up, k, machine);
-    plan.stiffness_features = r.features;
-    plan.connections = r.connections;
-    plan.stages_done.extend([Stage::Recognise, Stage::Connect]);
-    thinplan_sequence::run(&plan, k).apply_to(&mut plan);
-    let d = determine(&plan, &imported.brep, k).expect("determines");
-    (plan, imported.brep, d)
-}
-
-fn v(f: &MachiningFeature, name: &str) -> f64 {
-    *f.provenance
-        .values
-        .get(name)
-        .unwrap_or_else(|| panic!("{} has no `{name}`: {:?}", f.id, f.provenance))
-}
-
-/// The z extent of a feature, from its prism's corners.
-fn z_span(f: &MachiningFeature) -> (f64, f64) {
-    prism_points(&f.shape)
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p.z), hi.max(p.z))
-        })
-}
-
-/// `a` is machined before `b`: a path of `Before` constraints (my own
-/// depth-first search).
-fn precedes(d: &Determination, a: MachiningFeatureId, b: MachiningFeatureId) -> bool {
-    let mut succ: BTreeMap<MachiningFeatureId, Vec<MachiningFeatureId>> = BTreeMap::new();
-    for c in &d.constraints {
-        succ.entry(c.first).or_default().push(c.second);
-    }
-    let mut seen = BTreeSet::new();
-    let mut stack = vec![a];
-    while let Some(x) = stack.pop() {
-        if x == b && x != a {
-            return true;
-        }
-        for &y in succ.get(&x).map(Vec::as_slice).unwrap_or(&[]) {
-            if seen.insert(y) {
-                stack.push(y);
-            }
-        }
-    }
-    false
-}
-
-fn by_rule<'a>(d: &'a Determination, rule: &str) -> Vec<&'a MachiningFeature> {
-    d.features
-        .iter()
-        .filter(|f| f.provenance.rule == rule)
-        .collect()
-}
 
 fn set_holes(k: &mut Knowledge, f: impl Fn(&mut thinplan_knowledge::LargeHoles)) {
     for s in &mut k.strategies.strategies {
@@ -154,42 +88,6 @@ fn the_step_separation_line_lies_two_tool_diameters_below_the_highest_hole_top()
             "{} crosses",
             w.id
         );
-    }
-}
-
-#[test]
-fn the_upper_hole_halves_come_after_the_wall_around_them_and_before_the_rest() {
-    let k = Knowledge::builtin().unwrap();
-    let (_, _, d) = planned("wall_holes", &k);
-    let walls = by_rule(&d, "strategies.wall_steps");
-    let holes = by_rule(&d, "strategies.large_holes");
-    let line_depth = v(holes[0], "separation_depth");
-    for hf in &holes {
-        let (from, to) = (v(hf, "depth_from"), v(hf, "depth_to"));
-        let upper = to <= line_depth + 1e-6;
-        for w in &walls {
-            let (wf, wt) = (v(w, "depth_from"), v(w, "depth_to"));
-            if upper {
-                // Figure 4.8: the upper half of the hole last: after every
-                // wall step above the line (both sides), before every one
-                // below it.
-                if wt <= line_depth + 1e-6 {
-                    assert!(precedes(&d, w.id, hf.id), "{} before {}", w.id, hf.id);
-                } else {
-                    assert!(precedes(&d, hf.id, w.id), "{} before {}", hf.id, w.id);
-                }
-            } else if wf >= to - 1e-6 {
-                // A lower piece is machined before the steps below it.
-                assert!(precedes(&d, hf.id, w.id));
-            }
-        }
-        if !upper {
-            // … and after some step that exposed it.
-            assert!(walls
-                .iter()
-                .any(|w| v(w, "depth_to") >= to - 1e-6 && precedes(&d, w.id, hf.id)));
-            assert!(from >= line_depth - 1e-6);
-        }
     }
 }
 

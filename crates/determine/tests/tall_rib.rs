@@ -1,33 +1,16 @@
 //! Independent checks of stage 5 on the appendix A wall and every sample.
 
+mod common;
+
 use std::collections::BTreeMap;
 
 use glam::DVec3;
-use thinplan_determine::{determine, Determination};
+use thinplan_determine::Determination;
 use thinplan_knowledge::Knowledge;
-use thinplan_plan::{
-    ConstraintKind, MachiningFeature, MachiningFeatureId, Plan, Provenance, ProvenanceSource,
-    Setup, Stage, WallRole,
-};
-use thinplan_sizing::{deflection, MillingMode, Sizes, Wall};
+use thinplan_plan::{ConstraintKind, MachiningFeature, MachiningFeatureId, Plan, Stage, WallRole};
 
 fn planned(name: &str, k: &Knowledge) -> (Plan, Determination) {
-    let imported = thinplan_import::import(&format!("builtin:{name}")).expect("imports");
-    let setup = Setup {
-        up: DVec3::Z,
-        machine: thinplan_knowledge::DEFAULT_MACHINE.into(),
-        tool_set: thinplan_knowledge::DEFAULT_TOOL_SET.into(),
-        material: thinplan_knowledge::DEFAULT_MATERIAL.into(),
-        provenance: Provenance::new(ProvenanceSource::Default, "test"),
-    };
-    let mut plan = Plan::new(imported.part, setup);
-    let machine = k.machine(&plan.setup.machine).unwrap();
-    let r = thinplan_recognise::recognise(&imported.brep, plan.setup.up, k, machine);
-    plan.stiffness_features = r.features;
-    plan.connections = r.connections;
-    plan.stages_done.extend([Stage::Recognise, Stage::Connect]);
-    thinplan_sequence::run(&plan, k).apply_to(&mut plan);
-    let d = determine(&plan, &imported.brep, k).expect("determines");
+    let (plan, _, d) = common::planned(name, k);
     (plan, d)
 }
 
@@ -237,51 +220,6 @@ fn tall_rib_features_clear_the_rib_and_each_other() {
                 boxes[i][a].1.min(boxes[j][a].1) - boxes[i][a].0.max(boxes[j][a].0) > 1e-9
             });
             assert!(!overlap, "{} and {} overlap", mine[i].id, mine[j].id);
-        }
-    }
-}
-
-#[test]
-fn step_sizes_keep_the_deflection_within_the_allowed_value() {
-    let k = Knowledge::builtin().unwrap();
-    let e = k
-        .material(thinplan_knowledge::DEFAULT_MATERIAL)
-        .unwrap()
-        .youngs_modulus;
-    for name in [
-        "tall_rib",
-        "wing_rib",
-        "flange_web_slot",
-        "crossing_ribs",
-        "isogrid",
-    ] {
-        let (plan, d) = planned(name, &k);
-        for f in d
-            .features
-            .iter()
-            .filter(|f| f.provenance.values.contains_key("big_h"))
-        {
-            let sf = plan
-                .stiffness_features
-                .iter()
-                .find(|s| s.id == f.owner)
-                .unwrap();
-            let wall = Wall {
-                length: sf.length,
-                thickness: sf.thickness.unwrap(),
-                height: sf.height,
-            };
-            let sizes = Sizes {
-                b_rf: value(f, "b_rf"),
-                h: value(f, "h"),
-                big_h: value(f, "big_h"),
-            };
-            let delta = deflection(&wall, &sizes, &k.sizing, e, MillingMode::Peripheral);
-            assert!(
-                delta <= k.sizing.allowed_deflection + 1e-12,
-                "{name} {}: {delta}",
-                f.id
-            );
         }
     }
 }

@@ -3,7 +3,7 @@
 //! features, the machining order of the simulation and the deflection
 //! read-out. Read-only: no planning decision is made here.
 
-use std::collections::{BTreeMap, BTreeSet, VecDeque};
+use std::collections::{BTreeSet, VecDeque};
 
 use thinplan_knowledge::{Block, Knowledge};
 use thinplan_plan::{
@@ -186,41 +186,9 @@ pub fn owned(plan: &Plan, e: Entity) -> BTreeSet<Entity> {
 }
 
 /// The machining features in an order honouring `machining_constraints`
-/// (before edges; a simultaneous pair shares a rank), the smallest id first
-/// among those free to go. Features on a cycle (a hand-edited plan) follow
-/// by id.
+/// ([`Plan::machining_order`]).
 pub fn machining_order(plan: &Plan) -> Vec<MachiningFeatureId> {
-    let ids: BTreeSet<MachiningFeatureId> = plan.machining_features.iter().map(|f| f.id).collect();
-    let mut indeg: BTreeMap<MachiningFeatureId, usize> = ids.iter().map(|i| (*i, 0)).collect();
-    let mut succ: BTreeMap<MachiningFeatureId, Vec<MachiningFeatureId>> = BTreeMap::new();
-    for c in &plan.machining_constraints {
-        if c.kind == ConstraintKind::Before && ids.contains(&c.first) && ids.contains(&c.second) {
-            succ.entry(c.first).or_default().push(c.second);
-            *indeg.entry(c.second).or_default() += 1;
-        }
-    }
-    let mut ready: BTreeSet<MachiningFeatureId> = indeg
-        .iter()
-        .filter(|(_, d)| **d == 0)
-        .map(|(i, _)| *i)
-        .collect();
-    let mut out = Vec::with_capacity(ids.len());
-    let mut done = BTreeSet::new();
-    while let Some(&next) = ready.iter().next() {
-        ready.remove(&next);
-        out.push(next);
-        done.insert(next);
-        for s in succ.get(&next).into_iter().flatten() {
-            if let Some(d) = indeg.get_mut(s) {
-                *d -= 1;
-                if *d == 0 {
-                    ready.insert(*s);
-                }
-            }
-        }
-    }
-    out.extend(ids.into_iter().filter(|i| !done.contains(i)));
-    out
+    plan.machining_order()
 }
 
 /// The modelled deflection of the wall while one of its machining features
@@ -344,6 +312,7 @@ fn milling_mode(k: &Knowledge, rule: &str) -> MillingMode {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::BTreeMap;
 
     #[test]
     fn order_follows_constraints_then_ids() {

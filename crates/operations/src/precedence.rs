@@ -13,37 +13,9 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use thinplan_plan::{ConstraintKind, MachiningFeature, MachiningFeatureId, Plan};
 
-/// The machining order stage 6 used for adjacency: Kahn's algorithm over
-/// the machining constraints, lowest index first among the ready ones.
+/// The machining order stage 6 used for adjacency ([`Plan::machining_order`]).
 pub fn machining_order(plan: &Plan) -> Vec<MachiningFeatureId> {
-    let n = plan.machining_features.len();
-    let mut succ: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); n];
-    let mut indeg = vec![0usize; n];
-    for c in &plan.machining_constraints {
-        let (a, b) = (c.first.0 as usize, c.second.0 as usize);
-        if a < n && b < n && a != b && succ[a].insert(b) {
-            indeg[b] += 1;
-        }
-    }
-    let mut ready: BTreeSet<usize> = (0..n).filter(|&i| indeg[i] == 0).collect();
-    let mut order = Vec::with_capacity(n);
-    while let Some(v) = ready.pop_first() {
-        order.push(MachiningFeatureId(v as u32));
-        for &w in &succ[v] {
-            indeg[w] -= 1;
-            if indeg[w] == 0 {
-                ready.insert(w);
-            }
-        }
-    }
-    // A cycle (refused upstream) leaves features out: append them by id.
-    let seen: BTreeSet<u32> = order.iter().map(|f| f.0).collect();
-    order.extend(
-        (0..n as u32)
-            .filter(|i| !seen.contains(i))
-            .map(MachiningFeatureId),
-    );
-    order
+    plan.machining_order()
 }
 
 /// Each feature's place in [`machining_order`], by feature index.

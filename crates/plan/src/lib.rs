@@ -5,6 +5,8 @@
 
 pub mod io;
 pub mod model;
+pub mod order;
 
 pub use io::{load, save, PlanIoError};
 pub use model::*;
+pub use order::topological_order;
