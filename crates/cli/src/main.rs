@@ -12,7 +12,7 @@ use serde::Serialize;
 use thinplan_import::ImportError;
 use thinplan_knowledge::Knowledge;
 use thinplan_pipeline::{ErrorKind, PipelineError, Session};
-use thinplan_plan::Setup;
+use thinplan_plan::{Setup, Stage};
 
 mod pocket_cmd;
 mod post_cmd;
@@ -110,6 +110,29 @@ enum Command {
         /// Also write the setup sheet (one self-contained HTML page).
         #[arg(long)]
         sheet: Option<PathBuf>,
+        /// Stop after this stage: recognise, sequence, determine, features
+        /// (machining features with interference, adjacency and remaining
+        /// material), operations or order (the default: every stage).
+        #[arg(long)]
+        until: Option<String>,
+        /// Write per wall a side view of its machining features numbered in
+        /// machining order (figure 4.1) as DIR/SFn.svg, and, once there are
+        /// operations, its operation layers (figure 7.9) as DIR/SFn.layers.svg.
+        #[arg(long, value_name = "DIR")]
+        svg: Option<PathBuf>,
+    },
+    /// Why the plan is as it is: the provenance of a stiffness feature (SFn),
+    /// machining feature (MFn) or operation (OPn) with every constraint and
+    /// refusal naming it; with a second id, the chain of constraints that
+    /// orders the two.
+    Explain {
+        /// A plan file written by `thinplan plan`.
+        plan: PathBuf,
+        id: String,
+        /// A second feature: explain the order between the two.
+        other: Option<String>,
+        #[arg(long)]
+        json: bool,
     },
     /// Recognise stiffness features and their connections (stages 2-3).
     Recognize {
@@ -199,6 +222,7 @@ fn main() -> ExitCode {
         cli.command,
         Command::Inspect { json: true, .. }
             | Command::Plan { json: true, .. }
+            | Command::Explain { json: true, .. }
             | Command::Recognize { json: true, .. }
             | Command::CheckKnowledge { json: true, .. }
             | Command::SizeWall { json: true, .. }
@@ -230,16 +254,28 @@ fn run(command: Command) -> Result<(), CliError> {
             post,
             tool_table,
             sheet,
+            until,
+            svg,
         } => plan(
             part,
             out,
             &setup,
             json,
-            gcode
-                .as_deref()
-                .map(|g| (g, post.as_str(), tool_table.as_deref())),
-            sheet.as_deref(),
+            Outputs {
+                gcode: gcode
+                    .as_deref()
+                    .map(|g| (g, post.as_str(), tool_table.as_deref())),
+                sheet: sheet.as_deref(),
+                svg: svg.as_deref(),
+            },
+            until.as_deref(),
         ),
+        Command::Explain {
+            plan,
+            id,
+            other,
+            json,
+        } => explain(&plan, &id, other.as_deref(), json),
         Command::Recognize {
             part,
             setup,
@@ -526,14 +562,38 @@ fn make_setup(opts: &SetupOpts, k: &Knowledge) -> Result<Setup, CliError> {
     Ok(thinplan_pipeline::make_setup(&req, k)?)
 }
 
+/// What `plan` writes besides the plan file.
+struct Outputs<'a> {
+    /// Program, post-processor id and tool table.
+    gcode: Option<(&'a Path, &'a str, Option<&'a Path>)>,
+    sheet: Option<&'a Path>,
+    /// Directory for the per-wall pictures.
+    svg: Option<&'a Path>,
+}
+
 fn plan(
     part: Option<String>,
     out: Option<PathBuf>,
     setup_opts: &SetupOpts,
     json: bool,
-    gcode: Option<(&Path, &str, Option<&Path>)>,
-    sheet: Option<&Path>,
+    outputs: Outputs<'_>,
+    until: Option<&str>,
 ) -> Result<(), CliError> {
+    let Outputs { gcode, sheet, svg } = outputs;
+    let last = match until {
+        None => thinplan_pipeline::LAST_BUILT,
+        Some(name) => stage_named(name)?,
+    };
+    if gcode.is_some() && last < Stage::Order {
+        return Err(CliError {
+            code: exit::BAD_INPUT,
+            kind: "input",
+            message: format!(
+                "--gcode needs every stage; --until {} stops before the operation order",
+                until.unwrap_or_default()
+            ),
+        });
+    }
     let source = part.unwrap_or_else(|| format!("builtin:{}", thinplan_import::DEFAULT_SAMPLE));
     let knowledge = load_knowledge(setup_opts.knowledge.as_deref())?;
     // Validate the set-up before the (possibly long) import.
@@ -549,7 +609,7 @@ fn plan(
     progress.set_message(format!("import {source}"));
     let mut session = Session::open(&source, setup, knowledge)?;
     progress.inc(1);
-    session.run_all(|stage| {
+    session.run_to(last, &std::sync::atomic::AtomicBool::new(false), |stage| {
         progress.inc(1);
         progress.set_message(format!("{stage:?}").to_lowercase());
     })?;
@@ -593,11 +653,18 @@ fn plan(
             },
         )?;
     }
+    let pictures = match svg {
+        Some(dir) => wall_pictures(&plan, dir)?,
+        None => Vec::new(),
+    };
     if json {
         let mut v = thinplan_pipeline::report::plan_json(&plan, &brep, &plan_file, &warnings);
         v["collisions"] = thinplan_collision::collisions_json(&thinplan_collision::check_holders(
             &plan, &knowledge, &brep,
         ));
+        if svg.is_some() {
+            v["pictures"] = serde_json::json!(pictures);
+        }
         println!("{v}");
     } else {
         println!(
@@ -632,7 +699,95 @@ fn plan(
         for w in &warnings {
             println!("warning: {w}");
         }
+        if let Some(dir) = svg {
+            println!("{} picture(s) written to {}", pictures.len(), dir.display());
+        }
         println!("plan written to {plan_file}");
+    }
+    Ok(())
+}
+
+/// The stage `--until` names (`features`: machining features complete,
+/// stage 6).
+fn stage_named(name: &str) -> Result<Stage, CliError> {
+    let stage = match name.to_ascii_lowercase().as_str() {
+        "recognise" | "recognize" | "connect" => Stage::Connect,
+        "sequence" => Stage::Sequence,
+        "determine" => Stage::Determine,
+        "features" | "resolve" => Stage::Resolve,
+        "operations" => Stage::Operations,
+        "order" => Stage::Order,
+        _ => {
+            return Err(CliError {
+                code: exit::BAD_INPUT,
+                kind: "input",
+                message: format!(
+                    "--until {name}: not a stage; use recognise, sequence, determine, features, \
+                     operations or order"
+                ),
+            })
+        }
+    };
+    Ok(stage)
+}
+
+/// Per wall with machining features, figure 4.1's side view (and figure
+/// 7.9's layers once there are operations), written into `dir`.
+fn wall_pictures(plan: &thinplan_plan::Plan, dir: &Path) -> Result<Vec<String>, CliError> {
+    let fail = |path: &Path, e: std::io::Error| CliError {
+        code: exit::OUTPUT,
+        kind: "output",
+        message: format!("{}: {e}", path.display()),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| fail(dir, e))?;
+    let mut written = Vec::new();
+    for sf in plan
+        .stiffness_features
+        .iter()
+        .filter(|sf| sf.kind == thinplan_plan::StiffnessKind::Wall)
+        .filter(|sf| plan.machining_features.iter().any(|m| m.owner == sf.id))
+    {
+        let mut pictures = vec![(
+            dir.join(format!("{}.svg", sf.id)),
+            thinplan_sheet::wall_steps_svg(plan, sf.id),
+        )];
+        if !plan.operations.is_empty() {
+            pictures.push((
+                dir.join(format!("{}.layers.svg", sf.id)),
+                thinplan_sheet::layers_svg(plan, sf.id),
+            ));
+        }
+        for (path, text) in pictures {
+            std::fs::write(&path, text).map_err(|e| fail(&path, e))?;
+            written.push(path.display().to_string());
+        }
+    }
+    Ok(written)
+}
+
+fn explain(plan_file: &Path, id: &str, other: Option<&str>, json: bool) -> Result<(), CliError> {
+    let plan = thinplan_plan::load(plan_file).map_err(|e| CliError {
+        code: exit::BAD_INPUT,
+        kind: "input",
+        message: error_chain(&e),
+    })?;
+    let usage = |message: String| CliError {
+        code: exit::BAD_INPUT,
+        kind: "input",
+        message: format!("{}: {message}", plan_file.display()),
+    };
+    let a = thinplan_pipeline::explain::parse_subject(&plan, id).map_err(usage)?;
+    let v = match other {
+        None => thinplan_pipeline::explain::explain(&plan, a),
+        Some(b) => {
+            let b = thinplan_pipeline::explain::parse_subject(&plan, b).map_err(usage)?;
+            thinplan_pipeline::explain::explain_pair(&plan, a, b).map_err(usage)?
+        }
+    };
+    if json {
+        println!("{v}");
+    } else {
+        print!("{}", thinplan_pipeline::explain::explain_text(&v));
     }
     Ok(())
 }

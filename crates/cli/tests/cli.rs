@@ -675,3 +675,214 @@ fn programs_read_cleanly_in_linuxcnc_rs274() {
         }
     }
 }
+
+/// Issue 4's command line: `plan --until features --svg DIR` stops after
+/// the machining features and draws each wall (figure 4.1); `explain`
+/// gives what the plan file records, checked against the file itself.
+#[test]
+fn plan_until_features_draws_each_wall_and_explain_reads_the_provenance() {
+    let d = tmp("until");
+    let plan_file = d.join("tall.plan.json");
+    let (code, v) = run_json(
+        thinplan()
+            .args(["plan", "builtin:tall_rib", "--until", "features", "--json"])
+            .arg("--svg")
+            .arg(d.join("svg"))
+            .arg("--out")
+            .arg(&plan_file),
+    );
+    assert_eq!(code, 0, "{v}");
+    let stages: Vec<&str> = v["stages_done"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap())
+        .collect();
+    assert!(stages.contains(&"resolve"), "{stages:?}");
+    assert!(!stages.contains(&"operations"), "{stages:?}");
+    let plan = thinplan_plan::load(&plan_file).unwrap();
+    assert!(plan.operations.is_empty());
+    // One picture per wall with machining features, each naming them all.
+    let walls: Vec<_> = plan
+        .stiffness_features
+        .iter()
+        .filter(|f| plan.machining_features.iter().any(|m| m.owner == f.id))
+        .collect();
+    let pictures = v["pictures"].as_array().unwrap();
+    assert_eq!(pictures.len(), walls.len(), "{v}");
+    for w in &walls {
+        let svg = std::fs::read_to_string(d.join("svg").join(format!("{}.svg", w.id))).unwrap();
+        assert!(svg.starts_with("<svg ") && svg.trim_end().ends_with("</svg>"));
+        for m in plan.machining_features.iter().filter(|m| m.owner == w.id) {
+            assert!(
+                svg.contains(&format!("  {}  ", m.id)),
+                "{} not listed",
+                m.id
+            );
+        }
+    }
+
+    // explain MF: the same rule, values and constraints as the file.
+    let f = &plan.machining_features[0];
+    let (code, e) = run_json(
+        thinplan()
+            .arg("explain")
+            .arg(&plan_file)
+            .arg(f.id.to_string())
+            .arg("--json"),
+    );
+    assert_eq!(code, 0, "{e}");
+    assert_eq!(e["provenance"]["rule"], f.provenance.rule.as_str());
+    assert_eq!(e["owner"], f.owner.to_string().as_str());
+    for (k, x) in &f.provenance.values {
+        assert_eq!(e["provenance"]["values"][k].as_f64(), Some(*x), "{k}");
+    }
+    let naming = plan
+        .machining_constraints
+        .iter()
+        .filter(|c| c.first == f.id || c.second == f.id)
+        .count();
+    assert!(naming > 0);
+    assert_eq!(e["constraints"].as_array().unwrap().len(), naming);
+
+    // explain A B: a chain of the file's constraints from the first to the
+    // last feature in machining order.
+    let order = plan.machining_order();
+    let (a, b) = (order[0], *order.last().unwrap());
+    let (code, e) = run_json(thinplan().arg("explain").arg(&plan_file).args([
+        a.to_string(),
+        b.to_string(),
+        "--json".into(),
+    ]));
+    assert_eq!(code, 0, "{e}");
+    let chain = e["chain"].as_array().unwrap();
+    if e["order"] == "first_before_second" {
+        assert_eq!(chain[0]["first"], a.to_string().as_str());
+        assert_eq!(chain.last().unwrap()["then"], b.to_string().as_str());
+        for link in chain.windows(2) {
+            assert_eq!(link[0]["then"], link[1]["first"]);
+        }
+        for link in chain {
+            assert!(plan.machining_constraints.iter().any(|c| {
+                link["first"] == c.first.to_string().as_str()
+                    && link["then"] == c.second.to_string().as_str()
+                    && link["provenance"]["rule"] == c.provenance.rule.as_str()
+            }));
+        }
+    } else {
+        assert_eq!(e["order"], "unordered", "{e}");
+        assert!(chain.is_empty());
+    }
+    // The text form says the same.
+    let out = thinplan()
+        .arg("explain")
+        .arg(&plan_file)
+        .arg(f.id.to_string())
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains(&f.provenance.rule), "{text}");
+
+    // Bad ids and stages: exit 3 naming what is wrong.
+    let (code, e) = run_json(
+        thinplan()
+            .arg("explain")
+            .arg(&plan_file)
+            .args(["MF9999", "--json"]),
+    );
+    assert_eq!(code, 3, "{e}");
+    let msg = e["error"].as_str().unwrap();
+    assert!(
+        msg.contains("tall.plan.json") && msg.contains("MF9999"),
+        "{msg}"
+    );
+    let (code, e) = run_json(
+        thinplan()
+            .arg("explain")
+            .arg(&plan_file)
+            .args(["rib", "--json"]),
+    );
+    assert_eq!(code, 3, "{e}");
+    let (code, e) = run_json(thinplan().args(["plan", "--json", "--until", "lunch"]));
+    assert_eq!(code, 3, "{e}");
+    assert!(e["error"].as_str().unwrap().contains("lunch"));
+    let (code, e) = run_json(
+        thinplan()
+            .args(["plan", "--json", "--until", "features", "--gcode"])
+            .arg(d.join("x.ngc")),
+    );
+    assert_eq!(code, 3, "{e}");
+}
+
+/// "Changing a constant in sizing.ron changes the plan as it should": an
+/// allowed deflection of 0.002 mm (tall_rib's steps deflect 0.003 mm under
+/// the default 0.01) in a copied knowledge directory gives the rib smaller
+/// or wider machining features, each within the new value.
+#[test]
+fn a_tighter_allowed_deflection_in_sizing_ron_makes_more_careful_steps() {
+    let d = tmp("sizing");
+    let k = d.join("knowledge");
+    copy_dir(&repo().join("knowledge"), &k);
+    let sizing = k.join("sizing.ron");
+    let text = std::fs::read_to_string(&sizing).unwrap();
+    assert!(text.contains("allowed_deflection: 0.01,"));
+    std::fs::write(
+        &sizing,
+        text.replace("allowed_deflection: 0.01,", "allowed_deflection: 0.002,"),
+    )
+    .unwrap();
+    let mut plans = Vec::new();
+    for (tag, knowledge) in [("base", None), ("tight", Some(&k))] {
+        let out = d.join(format!("{tag}.plan.json"));
+        let mut cmd = thinplan();
+        cmd.args([
+            "plan",
+            "builtin:tall_rib",
+            "--until",
+            "determine",
+            "--json",
+            "--out",
+        ])
+        .arg(&out);
+        if let Some(k) = knowledge {
+            cmd.arg("--knowledge").arg(k);
+        }
+        let (code, v) = run_json(&mut cmd);
+        assert_eq!(code, 0, "{v}");
+        plans.push(thinplan_plan::load(&out).unwrap());
+    }
+    let steps = |p: &thinplan_plan::Plan| -> Vec<thinplan_plan::MachiningFeature> {
+        p.machining_features
+            .iter()
+            .filter(|f| f.provenance.rule == "strategies.wall_steps")
+            .cloned()
+            .collect()
+    };
+    let (base, half) = (steps(&plans[0]), steps(&plans[1]));
+    for f in &base {
+        assert!(f.provenance.values["deflection"] > 0.002, "{}", f.id);
+    }
+    for f in &half {
+        assert_eq!(f.provenance.values["allowed_deflection"], 0.002);
+        assert!(f.provenance.values["deflection"] <= 0.002, "{}", f.id);
+    }
+    // Lower steps (more of them) or a wider support.
+    let max_of = |fs: &[thinplan_plan::MachiningFeature], k: &str| {
+        fs.iter()
+            .map(|f| f.provenance.values[k])
+            .fold(0.0, f64::max)
+    };
+    println!(
+        "{} → {} features, H {} → {}, B_RF {} → {}",
+        base.len(),
+        half.len(),
+        max_of(&base, "big_h"),
+        max_of(&half, "big_h"),
+        max_of(&base, "b_rf"),
+        max_of(&half, "b_rf")
+    );
+    assert!(
+        (half.len() > base.len() && max_of(&half, "big_h") < max_of(&base, "big_h"))
+            || max_of(&half, "b_rf") > max_of(&base, "b_rf")
+    );
+}

@@ -16,6 +16,7 @@ use thinplan_import::ImportedPart;
 use thinplan_knowledge::Knowledge;
 use thinplan_plan::{Plan, Provenance, ProvenanceSource, Setup, Stage};
 
+pub mod explain;
 pub mod output;
 pub mod report;
 

@@ -8,9 +8,9 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use glam::{DVec2, DVec3};
-use thinplan_brep::Frame;
 use thinplan_plan::{Plan, Region3, StiffnessFeatureId};
 
+use crate::section::{self, Section};
 use crate::{escape, num, owner_colour};
 
 fn region_colour(r: Region3) -> &'static str {
@@ -70,64 +70,17 @@ const REGIONS: [Region3; 5] = [
 /// tool's width; moves across the wall (entries, stepovers) are lines.
 /// A wall with no operations gives a picture that says so.
 pub fn layers_svg(plan: &Plan, feature_owner: StiffnessFeatureId) -> String {
-    let up = plan.setup.up.normalize_or_zero();
-    let sf = plan
-        .stiffness_features
-        .iter()
-        .find(|s| s.id == feature_owner);
-    // The section plane: spanned by the wall's normal (made horizontal) and up.
-    let setup = thinplan_collision::setup_frame(plan.setup.up);
-    let normal = sf.map_or(setup.x, |s| s.axis);
-    let n = (normal - up * normal.dot(up))
-        .try_normalize()
-        .unwrap_or(setup.x);
-    let w = up.cross(n);
+    let section = Section::of(plan, feature_owner);
+    let Section { sf, n, w, wall, .. } = section;
+    let sh = |p: DVec3| section.at(p);
     let (w_max, h_px) = (1000.0, 640.0);
-
-    // The wall: its prism's corners in (s, h).
-    let mut wall: Option<(DVec2, DVec2)> = None;
-    let mut centre = 0.0;
-    if let Some(shape) = sf.and_then(|s| s.shape.as_ref()) {
-        let f = Frame::from_axis_ref(shape.frame.origin, shape.frame.z, Some(shape.frame.x));
-        let mut lo = DVec2::splat(f64::INFINITY);
-        let mut hi = DVec2::splat(f64::NEG_INFINITY);
-        for v in &shape.region.outer.vertices {
-            for z in [shape.z_min, shape.z_max] {
-                let p = f.to_world(DVec3::new(v.x, v.y, z));
-                let q = DVec2::new(p.dot(n), p.dot(up));
-                lo = lo.min(q);
-                hi = hi.max(q);
-            }
-        }
-        if lo.is_finite() && hi.is_finite() {
-            centre = 0.5 * (lo.x + hi.x);
-            wall = Some((lo, hi));
-        }
-    }
-    let sh = |p: DVec3| DVec2::new(p.dot(n) - centre, p.dot(up));
-
-    // Features of the wall and their operations in the plan's order.
-    let feats: Vec<&thinplan_plan::MachiningFeature> = plan
-        .machining_features
+    let feats: Vec<&thinplan_plan::MachiningFeature> =
+        section.features.iter().map(|(f, ..)| *f).collect();
+    let feat_boxes: Vec<_> = section
+        .features
         .iter()
-        .filter(|f| f.owner == feature_owner)
+        .map(|(f, a, b)| (f.id, *a, *b))
         .collect();
-    let mut feat_boxes = Vec::new();
-    for f in &feats {
-        let fr = Frame::from_axis_ref(f.shape.frame.origin, f.shape.frame.z, Some(f.shape.frame.x));
-        let mut lo = DVec2::splat(f64::INFINITY);
-        let mut hi = DVec2::splat(f64::NEG_INFINITY);
-        for p in thinplan_collision::loop_points(&f.shape.region.outer) {
-            for z in [f.shape.z_min, f.shape.z_max] {
-                let q = sh(fr.to_world(DVec3::new(p.x, p.y, z)));
-                lo = lo.min(q);
-                hi = hi.max(q);
-            }
-        }
-        if lo.is_finite() && hi.is_finite() {
-            feat_boxes.push((f.id, lo, hi));
-        }
-    }
     let ops: Vec<&thinplan_plan::Operation> = plan
         .operation_order
         .iter()
@@ -185,8 +138,8 @@ pub fn layers_svg(plan: &Plan, feature_owner: StiffnessFeatureId) -> String {
         hi = hi.max(p);
     };
     if let Some((a, b)) = wall {
-        grow(DVec2::new(a.x - centre, a.y));
-        grow(DVec2::new(b.x - centre, b.y));
+        grow(a);
+        grow(b);
     }
     for (_, a, b) in &feat_boxes {
         grow(*a);
@@ -222,41 +175,7 @@ pub fn layers_svg(plan: &Plan, feature_owner: StiffnessFeatureId) -> String {
         }
         None => format!("{feature_owner}: no such stiffness feature"),
     };
-    let _ = writeln!(
-        s,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w_px}\" height=\"{h_px}\" viewBox=\"0 0 {w_px} {h_px}\" font-family=\"sans-serif\" font-size=\"12\">"
-    );
-    let _ = writeln!(
-        s,
-        "<rect width=\"{w_px}\" height=\"{h_px}\" fill=\"white\"/>"
-    );
-    let _ = writeln!(
-        s,
-        "<text x=\"{ml}\" y=\"22\" font-size=\"15\">{}</text>",
-        escape(&title)
-    );
-    let _ = writeln!(
-        s,
-        "<text x=\"{ml}\" y=\"38\" fill=\"#555\">horizontal: offset from the wall's mid-plane along {}, mm; vertical: height along up, mm</text>",
-        escape(&format!("({}, {}, {})", num(n.x, 3), num(n.y, 3), num(n.z, 3)))
-    );
-    // Height ticks every 10 mm (or 1 mm for small pictures).
-    let step = if size.y > 30.0 { 10.0 } else { 1.0 };
-    let mut z = (lo.y / step).ceil() * step;
-    while z <= hi.y + 1e-9 {
-        let p = map(DVec2::new(lo.x, z));
-        let _ = writeln!(
-            s,
-            "<path d=\"M{} {} H{}\" stroke=\"#eee\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\" fill=\"#555\">{}</text>",
-            num(ml - 4.0, 1),
-            num(p.y, 2),
-            num(w_px - mr, 1),
-            num(ml - 8.0, 1),
-            num(p.y + 4.0, 2),
-            num(z, 0)
-        );
-        z += step;
-    }
+    section::frame(&mut s, (w_px, h_px), (ml, mr), &title, n, (lo, hi), &map);
     // Machining features.
     for (id, a, b) in &feat_boxes {
         let (pa, pb) = (map(*a), map(*b));
@@ -274,10 +193,7 @@ pub fn layers_svg(plan: &Plan, feature_owner: StiffnessFeatureId) -> String {
     }
     // The wall.
     if let Some((a, b)) = wall {
-        let (pa, pb) = (
-            map(DVec2::new(a.x - centre, a.y)),
-            map(DVec2::new(b.x - centre, b.y)),
-        );
+        let (pa, pb) = (map(a), map(b));
         let _ = writeln!(
             s,
             "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"#444\"/>",

@@ -10,6 +10,8 @@
 //! in id or plan order. All text from the plan and knowledge is escaped.
 
 mod layers;
+mod section;
+mod steps;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -22,6 +24,7 @@ use thinplan_knowledge::Knowledge;
 use thinplan_plan::{MachiningFeatureId, OperationId, Plan, StiffnessFeatureId};
 
 pub use layers::layers_svg;
+pub use steps::wall_steps_svg;
 
 /// Text for HTML and SVG: `&`, `<`, `>`, `"` and `'` escaped.
 pub fn escape(s: &str) -> String {
