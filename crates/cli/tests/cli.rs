@@ -463,15 +463,15 @@ fn plan_json_machining_features_follow_the_contract() {
 /// isogrid 2961, wing_rib 507. Debug and release builds give the same plan
 /// bytes (checked on isogrid at 5f06411).
 const MISSED_ALLOWANCE: &[(&str, f64, &str)] = &[
-    ("chamfered_rib", 3.0, "cells at the rib's ends where the rest pass's run-off leaves the wall (measured 1.9)"),
-    ("crossing_ribs", 750.0, "two-cell columns in the rib junctions' sharp corners and the junction corners the Ø12 reaches partly from beside the feature (measured 656.8)"),
-    ("flange_cutouts", 40.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab (measured 30.4; 157 before the wall rest pass, 273 while the whole-diameter overhang reached only space already cut and no wall rest pass finished the slabs' faces)"),
-    ("flange_web_slot", 0.5, "single cells at the slot's corners (measured 0.1)"),
-    ("isogrid", 1000.0, "strips at the ribs' ends and pocket corners the Ø12 reaches only partly (measured 967.5; 2961 before the R5 corners no tool fits alone were reached from the space cut beside them, 1275 before the wall rest pass)"),
-    ("pentagon_pocket", 0.5, "single 0.2 mm cells at the corners (the ideal is evaluated at cell centres; measured 0.27)"),
+    ("chamfered_rib", 0.5, "nothing left (measured 0.0; 1.9 before leftover at a tool's reach limit, known to a cell, was no longer called missed)"),
+    ("crossing_ribs", 30.0, "two-cell columns in the rib junctions' sharp corners (measured 23.8; 656.8 before leftover at the Ø12's reach limit in the junction corners, 0-0.2 mm beyond its exact reach, was no longer called missed)"),
+    ("flange_cutouts", 15.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab (measured 13.4; 30.4 before the reach-limit cells, 157 before the wall rest pass)"),
+    ("flange_web_slot", 0.1, "nothing left (measured 0.0; 0.06 before the reach-limit cells)"),
+    ("isogrid", 65.0, "strips at the ribs' ends and pocket corners the Ø12 reaches only partly (measured 57.5; 967.5 before the reach-limit cells, 2961 before the R5 corners no tool fits alone were reached from the space cut beside them)"),
+    ("pentagon_pocket", 0.1, "nothing left (measured 0.0; 0.27 before the reach-limit cells)"),
     ("tall_rib", 0.0, "nothing left (measured 0.0)"),
-    ("wall_holes", 0.1, "single cells at the wall's ends (measured 0.03)"),
-    ("wing_rib", 300.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) and cells in the pockets' sharp corners (measured 281.7; 372.4 before the flange-before-web order gave way to shanks, 474 before that, 515 while the whole-diameter overhang reached only space already cut and no wall rest pass finished the walls' ends)"),
+    ("wall_holes", 0.1, "nothing left (measured 0.0)"),
+    ("wing_rib", 35.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) and cells in the pockets' sharp corners (measured 27.8; 281.7 before the reach-limit cells, 372.4 before the flange-before-web order gave way to shanks)"),
 ];
 
 /// The largest share of a sample's feed length that may cut air (the stock
@@ -566,16 +566,19 @@ fn assert_machined(names: &[&str]) {
         // smallest tool's corner-radius fillet and cells at the walls that
         // the plan does not estimate. Hence the plan lies between the
         // simulation's unreachable and unreachable + missed, within a slack
-        // of 30 mm³ + 10 %. Above, 15 %: each feature's estimate is what its
-        // own passes leave, and its neighbours' wall rest passes (a smaller
-        // tool along their walls' ends, run last) take part of that, which
-        // no single feature's estimate sees (isogrid: 5138 estimated, 3569
-        // unreachable + 964 missed).
+        // of 30 mm³ + 15 % either way. Below: the simulation's unreachable
+        // includes the crescents at each tool's reach limit in sharp
+        // corners (known to a cell; wing_rib: 1951 estimated, 2225
+        // unreachable, 1971 before those cells were moved from missed).
+        // Above: each feature's estimate is what its own passes leave, and
+        // its neighbours' wall rest passes (a smaller tool along their
+        // walls' ends, run last) take part of that, which no single
+        // feature's estimate sees (isogrid: 5138 estimated, 4479
+        // unreachable + 58 missed).
         let unreach = v["leftover_unreachable"]["volume_mm3"].as_f64().unwrap();
-        let slack = 30.0 + 0.1 * reported;
-        let slack_above = 30.0 + 0.15 * reported;
+        let slack = 30.0 + 0.15 * reported;
         assert!(
-            reported >= unreach - slack && reported <= unreach + missed + slack_above,
+            reported >= unreach - slack && reported <= unreach + missed + slack,
             "{name}: the plan reports {reported:.1} mm³ unreachable, the simulation \
              {unreach:.1} unreachable + {missed:.1} missed"
         );

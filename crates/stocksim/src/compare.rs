@@ -258,6 +258,37 @@ fn sliding(src: &[f32], k: usize, out: &mut [f32], max: bool) {
     }
 }
 
+/// The ideal at each cell as its highest over the cell and its eight
+/// neighbours. The ideal's tool positions and the part are both sampled at
+/// cell centres, so where a tool's reach ends the ideal is known only to a
+/// cell: a position one cell nearer a wall than any real tool may stand
+/// passes, and its reach spills up to a cell past the true limit (at a
+/// sharp inside corner, a crescent along the circle the tool's edge
+/// describes). Leftover is called missed only where it stands above what
+/// the tools reach even a cell away.
+pub fn within_a_cell(ideal: &[f32], grid: &Grid) -> Vec<f32> {
+    let (nx, ny) = (grid.nx, grid.ny);
+    let mut rows = ideal.to_vec();
+    for j in 0..ny {
+        for i in 0..nx {
+            let k = j * nx + i;
+            let l = if i > 0 { ideal[k - 1] } else { ideal[k] };
+            let r = if i + 1 < nx { ideal[k + 1] } else { ideal[k] };
+            rows[k] = ideal[k].max(l).max(r);
+        }
+    }
+    let mut out = rows.clone();
+    for j in 0..ny {
+        for i in 0..nx {
+            let k = j * nx + i;
+            let d = if j > 0 { rows[k - nx] } else { rows[k] };
+            let u = if j + 1 < ny { rows[k + nx] } else { rows[k] };
+            out[k] = rows[k].max(d).max(u);
+        }
+    }
+    out
+}
+
 /// What a cell of the final stock is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum CellClass {

@@ -209,7 +209,8 @@ pub fn simulate(
         }
         best
     };
-    let classes = compare::classify(&stock.top, &field, &ideal, cfg.tol);
+    let reach = compare::within_a_cell(&ideal, &grid);
+    let classes = compare::classify(&stock.top, &field, &reach, cfg.tol);
     let summary = |class| {
         let regs = compare::regions(
             &classes,

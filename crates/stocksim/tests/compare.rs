@@ -153,6 +153,42 @@ fn sharp_inside_corners_are_unreachable() {
     assert_eq!(k, r.leftover_unreachable.cells);
 }
 
+/// A bull-nose Ø8 (corner radius 0.5) taken exactly into each sharp corner
+/// of the pocket: what it leaves there is beyond its reach, so nothing is
+/// missed, although the ideal (tool positions at cell centres) reaches up
+/// to a cell further. Cutting one corner short by 1 mm is still missed.
+#[test]
+fn leftover_at_the_limit_of_reach_is_unreachable_but_a_short_corner_is_missed() {
+    let part = pocket_part(0.0);
+    let lib = ToolLibrary::from([(1, ToolShape::bull(8.0, 0.5))]);
+    let run = |prog: &str| {
+        let p = parse(prog, "pocket.ngc").unwrap();
+        simulate(&part, &p, &lib, &SimConfig::default()).unwrap()
+    };
+    let exact = "G21 G90 G17\nT1 M6\nM3\nG0 X30 Y20 Z25\nG1 Z5 F300\nG1 X14 Y14\nG1 X46\nG1 Y26\nG1 X14\nG1 Y14\nG1 X14 Y20\nG1 X46\nG0 Z25\nM30\n";
+    let s = run(exact);
+    let r = &s.report;
+    assert_eq!(r.gouges.cells, 0, "{:?}", r.gouges);
+    assert_eq!(r.leftover_missed.cells, 0, "{:?}", r.leftover_missed);
+    // The four corners (and the corner radius's fillet along the walls'
+    // feet, which joins them into one region).
+    let corner = (16.0 - std::f64::consts::PI * 4.0) * 15.0;
+    assert!(r.leftover_unreachable.volume_mm3 > 0.75 * 4.0 * corner);
+    // The last corner cut short: from (14, 25) straight to (15, 26)
+    // instead of through (14, 26).
+    let short = exact.replace(
+        "G1 Y26\nG1 X14\nG1 Y14",
+        "G1 Y26\nG1 X15\nG1 X14 Y25\nG1 Y14",
+    );
+    assert_ne!(short, exact);
+    let s = run(&short);
+    let m = &s.report.leftover_missed;
+    assert!(m.cells > 0, "{m:?}");
+    let at = m.worst_at.unwrap();
+    assert!(at[0] < 14.0 && at[1] > 26.0, "{at:?}");
+    assert!((m.worst_mm - 15.0).abs() < 1e-3, "{}", m.worst_mm);
+}
+
 #[test]
 fn air_cutting_share() {
     let part = pocket_part(5.0);
