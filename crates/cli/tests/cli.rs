@@ -463,15 +463,15 @@ fn plan_json_machining_features_follow_the_contract() {
 /// isogrid 2961, wing_rib 507. Debug and release builds give the same plan
 /// bytes (checked on isogrid at 5f06411).
 const MISSED_ALLOWANCE: &[(&str, f64, &str)] = &[
-    ("chamfered_rib", 0.5, "nothing left (measured 0.0; 1.9 before leftover at a tool's reach limit, known to a cell, was no longer called missed)"),
-    ("crossing_ribs", 30.0, "two-cell columns in the rib junctions' sharp corners (measured 23.8; 656.8 before leftover at the Ø12's reach limit in the junction corners, 0-0.2 mm beyond its exact reach, was no longer called missed)"),
-    ("flange_cutouts", 15.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab (measured 13.4; 30.4 before the reach-limit cells, 157 before the wall rest pass)"),
-    ("flange_web_slot", 0.1, "nothing left (measured 0.0; 0.06 before the reach-limit cells)"),
-    ("isogrid", 65.0, "strips at the ribs' ends and pocket corners the Ø12 reaches only partly (measured 57.5; 967.5 before the reach-limit cells, 2961 before the R5 corners no tool fits alone were reached from the space cut beside them)"),
-    ("pentagon_pocket", 0.1, "nothing left (measured 0.0; 0.27 before the reach-limit cells)"),
+    ("chamfered_rib", 2.5, "cells at the rib's ends where the rest pass's run-off leaves the wall (measured 1.9)"),
+    ("crossing_ribs", 0.1, "nothing left (measured 0.0; 23.8 while the floor rest pass was refused along a whole wall for its last millimetres, 656.8 while the simulation's reach spilled past the tools' limits)"),
+    ("flange_cutouts", 20.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab (measured 16.0; 30.4 with the spilling reach, 157 before the wall rest pass)"),
+    ("flange_web_slot", 0.1, "nothing left (measured 0.0; 0.06 with the spilling reach)"),
+    ("isogrid", 55.0, "columns at the pockets' 60° corners, where rounded rest passes stop short of the tip (measured 45.4; 64.7 before the floor rest pass ran along partial walls, 967.5 with the spilling reach)"),
+    ("pentagon_pocket", 0.1, "nothing left (measured 0.0; 0.27 with the spilling reach)"),
     ("tall_rib", 0.0, "nothing left (measured 0.0)"),
     ("wall_holes", 0.1, "nothing left (measured 0.0)"),
-    ("wing_rib", 35.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) and cells in the pockets' sharp corners (measured 27.8; 281.7 before the reach-limit cells, 372.4 before the flange-before-web order gave way to shanks)"),
+    ("wing_rib", 30.0, "the cut-outs' bottoms in the 2 mm rib (slabs narrower than any tool) (measured 24.3; 32.0 before the floor rest pass ran along partial walls, 281.7 with the spilling reach, 372.4 before the flange-before-web order gave way to shanks)"),
 ];
 
 /// The largest share of a sample's feed length that may cut air (the stock
@@ -566,17 +566,18 @@ fn assert_machined(names: &[&str]) {
         // smallest tool's corner-radius fillet and cells at the walls that
         // the plan does not estimate. Hence the plan lies between the
         // simulation's unreachable and unreachable + missed, within a slack
-        // of 30 mm³ + 15 % either way. Below: the simulation's unreachable
+        // of 40 mm³ + 15 % either way. Below: the simulation's unreachable
         // includes the crescents at each tool's reach limit in sharp
-        // corners (known to a cell; wing_rib: 1951 estimated, 2225
-        // unreachable, 1971 before those cells were moved from missed).
+        // corners and its corner radius's fillet along walls, which the plan
+        // does not estimate (wing_rib: 1951 estimated, 2214 unreachable;
+        // flange_cutouts: 0 estimated, 26.0 unreachable).
         // Above: each feature's estimate is what its own passes leave, and
         // its neighbours' wall rest passes (a smaller tool along their
         // walls' ends, run last) take part of that, which no single
-        // feature's estimate sees (isogrid: 5138 estimated, 4479
-        // unreachable + 58 missed).
+        // feature's estimate sees (isogrid: 5138 estimated, 4461
+        // unreachable + 45 missed).
         let unreach = v["leftover_unreachable"]["volume_mm3"].as_f64().unwrap();
-        let slack = 30.0 + 0.15 * reported;
+        let slack = 40.0 + 0.15 * reported;
         assert!(
             reported >= unreach - slack && reported <= unreach + missed + slack,
             "{name}: the plan reports {reported:.1} mm³ unreachable, the simulation \

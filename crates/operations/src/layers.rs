@@ -2037,19 +2037,48 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
                 .iter()
                 .all(|p| inside(*p, &beside) == want_inside)
         };
-        // A wall stretch ends where the feature's tool came close enough:
-        // decided piece by piece along the chain.
-        let pieces: Vec<Edge2> = match rest {
-            Rest::Floor(_) => chain,
-            Rest::Wall(_) => chain.iter().flat_map(|e| e.split(4.0 * STEP)).collect(),
-        };
+        // A stretch ends where the feature's tool stopped being beside the
+        // wall (floor) or came close enough (wall): decided piece by piece
+        // along each edge (a whole edge would be refused for its last
+        // millimetres, and the fillet along the rest left standing); the
+        // accepted pieces of an edge are joined again (an edge kept whole is
+        // kept as it was).
         let mut cur: Vec<Edge2> = Vec::new();
         let mut parts = Vec::new();
-        for e in pieces {
-            if ok(&e) {
-                cur.push(e);
-            } else if !cur.is_empty() {
-                parts.push(std::mem::take(&mut cur));
+        for e in &chain {
+            let pieces = e.split(4.0 * STEP);
+            if pieces.iter().all(&ok) {
+                cur.push(*e);
+                continue;
+            }
+            // (start, end, Σ atan(bulge)): the joined arc's bulge is the
+            // tangent of the sum.
+            let mut run: Option<(DVec2, DVec2, f64)> = None;
+            for piece in pieces {
+                if ok(&piece) {
+                    run = Some(match run {
+                        None => (piece.a, piece.b, piece.bulge.atan()),
+                        Some((a, _, q)) => (a, piece.b, q + piece.bulge.atan()),
+                    });
+                } else {
+                    if let Some((a, b, q)) = run.take() {
+                        cur.push(Edge2 {
+                            a,
+                            b,
+                            bulge: q.tan(),
+                        });
+                    }
+                    if !cur.is_empty() {
+                        parts.push(std::mem::take(&mut cur));
+                    }
+                }
+            }
+            if let Some((a, b, q)) = run.take() {
+                cur.push(Edge2 {
+                    a,
+                    b,
+                    bulge: q.tan(),
+                });
             }
         }
         if !cur.is_empty() {

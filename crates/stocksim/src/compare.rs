@@ -3,6 +3,7 @@
 //! classification of the simulated stock.
 
 use std::collections::VecDeque;
+use std::f64::consts::SQRT_2;
 
 use glam::DVec2;
 use serde::Serialize;
@@ -119,7 +120,14 @@ pub fn ideal_field(part: &[f32], grid: &Grid, tool: &ToolShape, floor: f32) -> V
     }
     let core = (tool.radius() - tool.corner_radius) / c;
     let cap = sphere_offsets(tool.corner_radius, c);
-    let mut g = disc_filter(&f, w, h, core, true);
+    // Where a tool may stand is decided against part cells by their centres,
+    // but part may lie anywhere in a cell, up to half its diagonal from the
+    // centre: a position may then stand that much nearer a wall than any
+    // real tool, and its reach spill past the true limit (by that, divided
+    // by sin(θ/2) along the bisector of a corner of angle θ). Standing
+    // positions keep the half-diagonal more (the reach is at most that
+    // short, near walls only); what they sweep is the true tool's.
+    let mut g = disc_filter(&f, w, h, core + SQRT_2 / 2.0, true);
     if !cap.is_empty() {
         g = offsets_filter(&g, w, h, &cap, true);
         g = offsets_filter(&g, w, h, &cap, false);
@@ -256,37 +264,6 @@ fn sliding(src: &[f32], k: usize, out: &mut [f32], max: bool) {
             out[o] = src[dq[0]];
         }
     }
-}
-
-/// The ideal at each cell as its highest over the cell and its eight
-/// neighbours. The ideal's tool positions and the part are both sampled at
-/// cell centres, so where a tool's reach ends the ideal is known only to a
-/// cell: a position one cell nearer a wall than any real tool may stand
-/// passes, and its reach spills up to a cell past the true limit (at a
-/// sharp inside corner, a crescent along the circle the tool's edge
-/// describes). Leftover is called missed only where it stands above what
-/// the tools reach even a cell away.
-pub fn within_a_cell(ideal: &[f32], grid: &Grid) -> Vec<f32> {
-    let (nx, ny) = (grid.nx, grid.ny);
-    let mut rows = ideal.to_vec();
-    for j in 0..ny {
-        for i in 0..nx {
-            let k = j * nx + i;
-            let l = if i > 0 { ideal[k - 1] } else { ideal[k] };
-            let r = if i + 1 < nx { ideal[k + 1] } else { ideal[k] };
-            rows[k] = ideal[k].max(l).max(r);
-        }
-    }
-    let mut out = rows.clone();
-    for j in 0..ny {
-        for i in 0..nx {
-            let k = j * nx + i;
-            let d = if j > 0 { rows[k - nx] } else { rows[k] };
-            let u = if j + 1 < ny { rows[k + nx] } else { rows[k] };
-            out[k] = rows[k].max(d).max(u);
-        }
-    }
-    out
 }
 
 /// What a cell of the final stock is.

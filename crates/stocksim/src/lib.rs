@@ -209,8 +209,7 @@ pub fn simulate(
         }
         best
     };
-    let reach = compare::within_a_cell(&ideal, &grid);
-    let classes = compare::classify(&stock.top, &field, &reach, cfg.tol);
+    let classes = compare::classify(&stock.top, &field, &ideal, cfg.tol);
     let summary = |class| {
         let regs = compare::regions(
             &classes,
