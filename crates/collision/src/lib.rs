@@ -153,7 +153,9 @@ impl Body {
     }
 
     /// Signed distance in plan view from the segment `a`–`b` to the body
-    /// (negative inside) and the segment parameter where it is reached.
+    /// (negative inside) and the segment parameter where it is reached. The
+    /// reference for [`EdgeIndex::segment_distance`], which the check uses.
+    #[cfg(test)]
     fn segment_distance(&self, a: DVec2, b: DVec2) -> (f64, f64) {
         let mut best = (f64::INFINITY, 0.0);
         for lp in &self.loops {
@@ -179,12 +181,212 @@ impl Body {
         }
     }
 
+    #[cfg(test)]
     fn boundary_distance(&self, p: DVec2) -> f64 {
         self.loops
             .iter()
             .flat_map(|lp| (0..lp.len()).map(move |i| (lp[i], lp[(i + 1) % lp.len()])))
             .map(|(a, b)| point_seg(p, a, b).0)
             .fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// Margin, mm, by which [`EdgeIndex`] over-reaches: an edge whose box lies farther than the
+/// reach plus this from a piece's box is farther than the reach, rounding included (its
+/// error is some 1e-13 mm at part sizes).
+const INDEX_MARGIN: f64 = 1e-6;
+
+/// A body's edges on a uniform grid, for [`Body::segment_distance`] and [`Body::contains`]
+/// asked only about edges near a piece: exact, as only edges that cannot matter are skipped
+/// (see [`EdgeIndex::segment_distance`]).
+struct EdgeIndex {
+    /// The body's edges in its order: loop by loop, `(lp[i], lp[i + 1])`.
+    edges: Vec<(DVec2, DVec2)>,
+    lo: DVec2,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    /// cell `j * nx + i` holds `cell_items[cell_start[c]..cell_start[c + 1]]`, ascending
+    cell_start: Vec<u32>,
+    cell_items: Vec<u32>,
+    /// row `j` (y from `lo.y + j·cell`) holds the edges whose y range meets it, ascending
+    row_start: Vec<u32>,
+    row_items: Vec<u32>,
+    /// the first cell (column, row) of each edge's box
+    first_cell: Vec<(u32, u32)>,
+}
+
+/// Buckets as compressed lists: `ranges[k]` are the buckets of item `k`.
+fn buckets(n: usize, ranges: impl Fn(usize) -> Vec<usize>, items: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; n + 1];
+    for k in 0..items {
+        for c in ranges(k) {
+            start[c + 1] += 1;
+        }
+    }
+    for c in 0..n {
+        start[c + 1] += start[c];
+    }
+    let mut fill: Vec<u32> = start[..n].to_vec();
+    let mut out = vec![0u32; start[n] as usize];
+    for k in 0..items {
+        for c in ranges(k) {
+            out[fill[c] as usize] = k as u32;
+            fill[c] += 1;
+        }
+    }
+    (start, out)
+}
+
+impl EdgeIndex {
+    /// At most this many cells along a side.
+    const CELLS: f64 = 32.0;
+
+    fn new(body: &Body) -> EdgeIndex {
+        let edges: Vec<(DVec2, DVec2)> = body
+            .loops
+            .iter()
+            .flat_map(|lp| (0..lp.len()).map(move |i| (lp[i], lp[(i + 1) % lp.len()])))
+            .collect();
+        let (lo, hi) = (body.lo, body.hi);
+        let ext = (hi - lo).max(DVec2::splat(1e-9));
+        let cell = (ext.max_element() / Self::CELLS).max(1e-9);
+        let nx = ((ext.x / cell).floor() as usize + 1).max(1);
+        let ny = ((ext.y / cell).floor() as usize + 1).max(1);
+        let mut g = EdgeIndex {
+            edges,
+            lo,
+            cell,
+            nx,
+            ny,
+            cell_start: Vec::new(),
+            cell_items: Vec::new(),
+            row_start: Vec::new(),
+            row_items: Vec::new(),
+            first_cell: Vec::new(),
+        };
+        let boxes: Vec<((usize, usize), (usize, usize))> = g
+            .edges
+            .iter()
+            .map(|(a, b)| (g.cell_of(a.min(*b)), g.cell_of(a.max(*b))))
+            .collect();
+        g.first_cell = boxes
+            .iter()
+            .map(|&((i0, j0), _)| (i0 as u32, j0 as u32))
+            .collect();
+        (g.cell_start, g.cell_items) = buckets(
+            nx * ny,
+            |k| {
+                let ((i0, j0), (i1, j1)) = boxes[k];
+                (j0..=j1)
+                    .flat_map(|j| (i0..=i1).map(move |i| j * nx + i))
+                    .collect()
+            },
+            boxes.len(),
+        );
+        (g.row_start, g.row_items) = buckets(
+            ny,
+            |k| {
+                let ((_, j0), (_, j1)) = boxes[k];
+                (j0..=j1).collect()
+            },
+            boxes.len(),
+        );
+        g
+    }
+
+    /// The cell of `p`, clamped to the grid; monotone in each coordinate.
+    fn cell_of(&self, p: DVec2) -> (usize, usize) {
+        let q = (p - self.lo) / self.cell;
+        (
+            (q.x.floor().max(0.0) as usize).min(self.nx - 1),
+            (q.y.floor().max(0.0) as usize).min(self.ny - 1),
+        )
+    }
+
+    /// [`Body::contains`]: only the edges whose y range meets `p`'s row can change the count
+    /// (an edge crosses `p`'s horizontal only if `p.y` lies in its y range, and the row of
+    /// every y in that range is among the edge's rows); even-odd does not depend on the
+    /// order.
+    fn contains(&self, p: DVec2) -> bool {
+        let j = self.cell_of(p).1;
+        let mut inside = false;
+        for &k in &self.row_items[self.row_start[j] as usize..self.row_start[j + 1] as usize] {
+            let (a, b) = self.edges[k as usize];
+            if (a.y > p.y) != (b.y > p.y) {
+                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+                if p.x < x {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+
+    /// [`Body::boundary_distance`], every edge in the same order.
+    fn boundary_distance(&self, p: DVec2) -> f64 {
+        self.edges
+            .iter()
+            .map(|&(a, b)| point_seg(p, a, b).0)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// [`Body::segment_distance`] wherever its distance is below `reach`; otherwise a
+    /// distance ≥ `reach` (maybe not the least). Only edges whose boxes lie within `reach`
+    /// (plus [`INDEX_MARGIN`]) of the segment's box are measured, in the body's order: every
+    /// edge nearer than `reach` is among them, so when the least distance is below `reach`
+    /// the same first nearest edge gives the same distance and parameter. Inside the body
+    /// the boundary distance over all edges, as there. A query covering half the grid or more
+    /// scans every edge in order.
+    fn segment_distance(&self, a: DVec2, b: DVec2, reach: f64) -> (f64, f64) {
+        let mut best = (f64::INFINITY, 0.0);
+        let grow = reach + INDEX_MARGIN;
+        let (i0, j0) = self.cell_of(a.min(b) - DVec2::splat(grow));
+        let (i1, j1) = self.cell_of(a.max(b) + DVec2::splat(grow));
+        if grow.is_finite() && 2 * (i1 - i0 + 1) * (j1 - j0 + 1) <= self.nx * self.ny {
+            // each edge once (in the first cell of its box within the query's), and of equal
+            // distances the first edge in the body's order, as the scan in order keeps
+            let mut best_k = u32::MAX;
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let c = j * self.nx + i;
+                    for &k in &self.cell_items
+                        [self.cell_start[c] as usize..self.cell_start[c + 1] as usize]
+                    {
+                        let (bi, bj) = self.first_cell[k as usize];
+                        if bi.max(i0 as u32) != i as u32 || bj.max(j0 as u32) != j as u32 {
+                            continue;
+                        }
+                        let (c, d) = self.edges[k as usize];
+                        let (dist, t) = seg_seg(a, b, c, d);
+                        if dist < best.0 || (dist == best.0 && k < best_k) {
+                            best = (dist, t);
+                            best_k = k;
+                        }
+                    }
+                }
+            }
+        } else {
+            for &(c, d) in &self.edges {
+                let (dist, t) = seg_seg(a, b, c, d);
+                if dist < best.0 {
+                    best = (dist, t);
+                }
+            }
+        }
+        let mut deepest: Option<(f64, f64)> = None;
+        for (p, t) in [(a, 0.0), (b, 1.0)] {
+            if self.contains(p) {
+                let d = self.boundary_distance(p);
+                if deepest.is_none_or(|(dd, _)| d > dd) {
+                    deepest = Some((d, t));
+                }
+            }
+        }
+        match deepest {
+            Some((d, t)) => (-d, t),
+            None => best,
+        }
     }
 }
 
@@ -406,12 +608,17 @@ fn check_with_part(plan: &Plan, k: &Knowledge, frame: &Frame, part: &[Body], rep
     };
     // Features: body, top of what is left (lowered as their operations cut
     // top-down), operations still to run.
-    let mut features: BTreeMap<MachiningFeatureId, (Body, f64, usize)> = BTreeMap::new();
+    // (and each body's edge grid, built once)
+    #[allow(clippy::type_complexity)]
+    let mut features: BTreeMap<MachiningFeatureId, (Body, f64, usize, EdgeIndex)> = BTreeMap::new();
+    // each body's edge grid, built once
+    let part_index: Vec<EdgeIndex> = part.iter().map(EdgeIndex::new).collect();
     for f in &plan.machining_features {
         match feature_body(f, frame) {
             Ok(b) => {
                 let top = b.z_hi;
-                features.insert(f.id, (b, top, 0));
+                let index = EdgeIndex::new(&b);
+                features.insert(f.id, (b, top, 0, index));
             }
             Err(e) => report.unchecked.push(e),
         }
@@ -478,17 +685,19 @@ fn check_with_part(plan: &Plan, k: &Knowledge, frame: &Frame, part: &[Body], rep
                     let p = a.lerp(b, j as f64 / n as f64);
                     let q = a.lerp(b, (j + 1) as f64 / n as f64);
                     report.pieces += 1;
-                    let bodies = part.iter().chain(
-                        features
-                            .iter()
-                            .filter_map(|(_, (b, _, left))| (*left > 0).then_some(b)),
-                    );
-                    for body in bodies {
-                        // What is left of a feature being cut lies below its top.
-                        let z_hi = match body.against {
-                            Against::Feature(fid) => features.get(&fid).map_or(body.z_hi, |f| f.1),
-                            Against::Part => body.z_hi,
-                        };
+                    // What is left of a feature being cut lies below its top (its entry's
+                    // top: a feature body's `against` is its own id).
+                    let bodies = part
+                        .iter()
+                        .zip(&part_index)
+                        .map(|(b, index)| (b, index, b.z_hi))
+                        .chain(
+                            features
+                                .values()
+                                .filter(|(_, _, left, _)| *left > 0)
+                                .map(|(b, top, _, index)| (b, index, *top)),
+                        );
+                    for (body, index, z_hi) in bodies {
                         for &(what, r, from, upto) in &cyl {
                             let c_lo = p.z.min(q.z) + from;
                             let c_hi = p.z.max(q.z) + upto;
@@ -509,7 +718,8 @@ fn check_with_part(plan: &Plan, k: &Knowledge, frame: &Frame, part: &[Body], rep
                             {
                                 continue;
                             }
-                            let (d, t) = body.segment_distance(p2, q2);
+                            // exact where it matters: pen > CONTACT > 0 needs d < r
+                            let (d, t) = index.segment_distance(p2, q2, r);
                             let pen = r - d;
                             if pen <= CONTACT {
                                 continue;
@@ -584,4 +794,79 @@ pub fn collisions_json(collisions: &[Collision]) -> Value {
             })
             .collect(),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (no extra dependency).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            lo + (hi - lo) * self.next()
+        }
+    }
+
+    /// The edge grid answers as the body does: `contains` everywhere, the boundary distance,
+    /// and the segment distance with its parameter wherever that is below the reach (and a
+    /// distance at least the reach otherwise), for bodies of star-shaped and zig-zag loops
+    /// with holes, segments inside, across and outside, short and long, and reaches from 0
+    /// to beyond the body.
+    #[test]
+    fn edge_index_equals_body() {
+        let mut g = Lcg(7);
+        for case in 0..300 {
+            let mut loops = Vec::new();
+            for _ in 0..1 + case % 3 {
+                let c = DVec2::new(g.range(-40.0, 40.0), g.range(-40.0, 40.0));
+                let n = 3 + (g.next() * 40.0) as usize;
+                let lp: Vec<DVec2> = (0..n)
+                    .map(|i| {
+                        let a = std::f64::consts::TAU * i as f64 / n as f64;
+                        c + DVec2::from_angle(a) * g.range(2.0, 30.0)
+                    })
+                    .collect();
+                loops.push(lp);
+            }
+            if case % 7 == 0 {
+                // an axis-aligned rectangle: edges exactly on cell rows
+                loops.push(vec![
+                    DVec2::new(-10.0, -10.0),
+                    DVec2::new(10.0, -10.0),
+                    DVec2::new(10.0, 10.0),
+                    DVec2::new(-10.0, 10.0),
+                ]);
+            }
+            let body = Body::new(Against::Part, loops, 0.0, 1.0).unwrap();
+            let index = EdgeIndex::new(&body);
+            for _ in 0..200 {
+                let a = DVec2::new(g.range(-90.0, 90.0), g.range(-90.0, 90.0));
+                let b = if g.next() < 0.5 {
+                    a + DVec2::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0))
+                } else {
+                    DVec2::new(g.range(-90.0, 90.0), g.range(-90.0, 90.0))
+                };
+                assert_eq!(index.contains(a), body.contains(a));
+                assert_eq!(index.boundary_distance(a), body.boundary_distance(a));
+                let reach = [0.0, 0.5, 3.0, 8.0, 25.0, 200.0][(g.next() * 6.0) as usize];
+                let want = body.segment_distance(a, b);
+                let got = index.segment_distance(a, b, reach);
+                if want.0 < reach {
+                    assert_eq!(got, want, "case {case}: {a} {b} reach {reach}");
+                } else {
+                    assert!(got.0 >= reach, "case {case}: {a} {b} reach {reach}");
+                }
+            }
+        }
+    }
 }

@@ -5,7 +5,7 @@ use std::f64::consts::TAU;
 
 use crate::contour::EdgeTopology;
 use crate::fem::{self, Mesh, Solution};
-use crate::geom::{loop_gap, perimeter, signed_area, SegIndex};
+use crate::geom::{directed_within, loop_within, perimeter, signed_area, SegIndex, NO_HINT};
 use crate::offset::{append_loop_from_nearest, offset_loops, offset_path, sample_level};
 use crate::{Method, Pocket, PocketError, PocketParams, PocketPath};
 
@@ -487,20 +487,34 @@ fn choose_levels(
 ) -> Result<Vec<(f64, Vec<DVec2>)>, ()> {
     let mut out: Vec<(f64, Vec<DVec2>)> = Vec::new();
     let mut prev_level = 1.0;
-    let interior_gap = |lvl: f64, lp: &[DVec2]| -> f64 {
-        let idx = SegIndex::new(&[lp], true);
-        let mut g = core.iter().map(|&c| idx.nearest(c)).fold(0.0, f64::max);
-        for (p, &u) in mesh.vertices.iter().zip(&sol.u) {
-            if u > lvl {
-                g = g.max(idx.nearest(*p));
-            }
-        }
-        g
+    // Only whether a gap is within `target` is asked, so the measurements stop at the first
+    // point farther than `target` (exactly the comparison of the maximum with `target`).
+    // Whether the core and every mesh vertex above `lvl` lie within `target` of `lp`.
+    let interior_within = |lvl: f64, idx: &SegIndex| -> bool {
+        let mut hint = NO_HINT;
+        0.0 <= target
+            && core
+                .iter()
+                .all(|&c| idx.within_hinted(c, target, &mut hint))
+            && mesh
+                .vertices
+                .iter()
+                .zip(&sol.u)
+                .all(|(p, &u)| u <= lvl || idx.within_hinted(*p, target, &mut hint))
     };
+    let rough_idx = SegIndex::new(&[rough_loop], true);
     loop {
-        let done = match out.last() {
-            None => interior_gap(0.0, rough_loop) <= target,
-            Some((_, prev)) => loop_gap(prev, rough_loop) <= target,
+        // the previous contour's index, for the roughing boundary and every candidate
+        let prev_idx = out
+            .last()
+            .map(|(_, prev)| SegIndex::new(&[prev.as_slice()], true));
+        let done = match (out.last(), &prev_idx) {
+            (Some((_, prev)), Some(prev_idx)) => {
+                // loop_gap(prev, rough_loop) <= target
+                directed_within(prev, &rough_idx, target)
+                    && directed_within(rough_loop, prev_idx, target)
+            }
+            _ => interior_within(0.0, &rough_idx),
         };
         if done {
             return Ok(out);
@@ -509,15 +523,20 @@ fn choose_levels(
         let mut best: Option<(f64, Vec<DVec2>)> = None;
         for _ in 0..40 {
             let mid = 0.5 * (lo + hi);
-            let mut l = source.loops(mesh, &sol.u, mid);
+            let l = source.loops(mesh, &sol.u, mid);
             let ok = if l.len() == 1 {
-                let lp = l.pop().unwrap();
-                let g = match out.last() {
-                    None => interior_gap(mid, &lp),
-                    Some((_, prev)) => loop_gap(prev, &lp),
+                let lp = &l[0];
+                let lp_idx = || SegIndex::new(&[lp.as_slice()], true);
+                let fits = match (out.last(), &prev_idx) {
+                    (Some((_, prev)), Some(prev_idx)) => {
+                        // loop_gap(prev, lp) <= target, the cached index's half first
+                        directed_within(lp, prev_idx, target)
+                            && directed_within(prev, &lp_idx(), target)
+                    }
+                    _ => interior_within(mid, &lp_idx()),
                 };
-                if g <= target {
-                    best = Some((mid, lp));
+                if fits {
+                    best = Some((mid, lp.clone()));
                     true
                 } else {
                     false
@@ -566,9 +585,11 @@ fn attempt(
     // start the orbits on the ray towards the nearest point of the roughing boundary
     let theta0 = {
         let idx = SegIndex::new(&[&core_pts], false);
-        let p = rough_loop
+        // each point's distance once (min_by keeps the first of equal minima either way)
+        let (p, _) = rough_loop
             .iter()
-            .min_by(|a, b| idx.nearest(**a).total_cmp(&idx.nearest(**b)))
+            .map(|p| (p, idx.nearest(*p)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
             .unwrap();
         core.tau(*p).unwrap_or(0.0)
     };
@@ -612,7 +633,7 @@ fn attempt(
     // start ray and runs it in full instead
     let from_centre = contours
         .first()
-        .is_none_or(|c1| loop_gap(&core_pts, c1) <= target);
+        .is_none_or(|c1| loop_within(&core_pts, c1, &SegIndex::new(&[c1], true), target));
     // --- orbits: centre → C1 → … → Cm → ∂Ω' (roughing boundary)
     let mut radii: Vec<Box<dyn Fn(f64) -> f64 + '_>> = Vec::new();
     if from_centre {
