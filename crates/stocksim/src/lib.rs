@@ -210,12 +210,24 @@ pub fn simulate(
         best
     };
     let classes = compare::classify(&stock.top, &field, &ideal, cfg.tol);
+    // Missed material is measured down to what the tools could have
+    // reached, not to the part: a column no tool reaches whose top a tool
+    // could have shaved counts the shaving only.
+    let reachable: Vec<f32> = ideal
+        .iter()
+        .zip(&part_top)
+        .map(|(i, p)| i.max(*p))
+        .collect();
     let summary = |class| {
         let regs = compare::regions(
             &classes,
             class,
             &stock.top,
-            &part_top,
+            if class == CellClass::Missed {
+                &reachable
+            } else {
+                &part_top
+            },
             &stock.last_line,
             &grid,
         );

@@ -186,7 +186,9 @@ fn leftover_at_the_limit_of_reach_is_unreachable_but_a_short_corner_is_missed() 
     assert!(m.cells > 0, "{m:?}");
     let at = m.worst_at.unwrap();
     assert!(at[0] < 14.0 && at[1] > 26.0, "{at:?}");
-    assert!((m.worst_mm - 15.0).abs() < 1e-3, "{}", m.worst_mm);
+    // Measured down to what the tool reaches there: the floor, less the
+    // torus its corner radius leaves (15 mm of pocket).
+    assert!(m.worst_mm > 14.5 && m.worst_mm <= 15.0, "{}", m.worst_mm);
 }
 
 #[test]
