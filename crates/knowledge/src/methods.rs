@@ -33,6 +33,13 @@ pub struct MethodKnowledge {
     /// A path junction turning more than this (degrees) is a corner where the
     /// time model brings the feed to zero.
     pub corner_angle_deg: f64,
+    /// Where a run-up, a run-off or an entry helix does not fit, it is
+    /// tried again at these fractions of its size, largest first (then a
+    /// straight lead-in, or a ramp).
+    pub fit_scales: Vec<f64>,
+    /// The quarter circle that leads a boundary pass off into cleared
+    /// space, radius a fraction of D.
+    pub run_off_radius: f64,
     /// The methods, tried in order: the first whose `applies` matches a
     /// feature is used.
     pub methods: Vec<Method>,
@@ -334,6 +341,28 @@ impl MethodKnowledge {
             out.push(format!(
                 "corner_angle_deg {} is outside 0..=180",
                 self.corner_angle_deg
+            ));
+        }
+        let descending = self.fit_scales.windows(2).all(|w| w[0] > w[1]);
+        if self.fit_scales.is_empty()
+            || !descending
+            || self
+                .fit_scales
+                .iter()
+                .any(|s| !(s.is_finite() && *s > 0.0 && *s <= 1.0))
+        {
+            out.push(format!(
+                "fit_scales {:?} must be one or more fractions in (0, 1], largest first",
+                self.fit_scales
+            ));
+        }
+        if !(self.run_off_radius.is_finite()
+            && self.run_off_radius > 0.0
+            && self.run_off_radius <= 10.0)
+        {
+            out.push(format!(
+                "run_off_radius {} must lie in (0, 10]",
+                self.run_off_radius
             ));
         }
         let mut ids = BTreeSet::new();

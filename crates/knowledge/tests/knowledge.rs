@@ -329,6 +329,8 @@ fn broken_methods_are_refused_with_every_problem() {
         .replacen("Ramp(angle_deg: 3.0)", "Ramp(angle_deg: 0.0)", 1)
         .replacen("min_corner_gain: 0.1", "min_corner_gain: -0.1", 1)
         .replacen("min_left: 0.1", "min_left: 0.0", 1)
+        .replacen("fit_scales: [1.0, 0.5, 0.25]", "fit_scales: [0.5, 1.0]", 1)
+        .replacen("run_off_radius: 0.25", "run_off_radius: 0.0", 1)
         .replacen(
             open_method,
             &format!(
@@ -348,6 +350,16 @@ fn broken_methods_are_refused_with_every_problem() {
     assert!(text.contains("entry angle 0°"), "{text}");
     assert!(text.contains("Closed sides"), "{text}");
     assert!(text.contains("min_corner_gain -0.1"), "{text}");
+    assert!(
+        text.contains(
+            "fit_scales [0.5, 1.0] must be one or more fractions in (0, 1], largest first"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("run_off_radius 0 must lie in (0, 10]"),
+        "{text}"
+    );
     assert!(
         text.contains("wall_rest min_left 0 must be positive"),
         "{text}"

@@ -5,8 +5,8 @@ use cavalier_contours::polyline::PlineSource;
 use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 use glam::{DVec2, DVec3};
 use thinplan_knowledge::{
-    FullCut, Knowledge, LevelEntry, Machine, Material, Method, MirrorLayers, Pattern, RestPass,
-    RunUp, SidesMatch, SpindleDirection, Tool, ToolChoice, ToolSet, WallRest,
+    FullCut, Knowledge, LevelEntry, Machine, Material, Method, MethodKnowledge, MirrorLayers,
+    Pattern, RestPass, RunUp, SidesMatch, SpindleDirection, Tool, ToolChoice, ToolSet, WallRest,
 };
 use thinplan_plan::{Adjacency, MachiningFeature, Provenance, ProvenanceSource};
 
@@ -658,6 +658,7 @@ fn boundary_pass(
     run_up: RunUp,
     d: f64,
     cleared: &[Vec<DVec2>],
+    mk: &MethodKnowledge,
 ) -> BoundaryPass {
     let p0 = chain[0].a;
     let t0 = chain[0].tangents().0;
@@ -673,13 +674,13 @@ fn boundary_pass(
         let mut tries: Vec<(f64, bool)> = Vec::new();
         match run_up {
             RunUp::Circular { radius } => {
-                for s in [1.0, 0.5, 0.25] {
+                for s in &mk.fit_scales {
                     tries.push((radius * d * s, true));
                 }
                 tries.push((radius * d, false));
             }
             RunUp::Tangential { length } => {
-                for s in [1.0, 0.5, 0.25] {
+                for s in &mk.fit_scales {
                     tries.push((length * d * s, false));
                 }
             }
@@ -708,8 +709,8 @@ fn boundary_pass(
     }
     segs.extend(chain_segs(chain));
     if inside(pe, &g.region_polys) {
-        for s in [1.0, 0.5, 0.25] {
-            let rho = 0.25 * d * s;
+        for s in &mk.fit_scales {
+            let rho = mk.run_off_radius * d * s;
             let c = pe + te.perp() * rho;
             let seg = Seg2 {
                 to: c + te * rho,
@@ -1401,7 +1402,7 @@ fn plan_band(
     let passes: Vec<BoundaryPass> = match boundary {
         Some(b) => chains
             .iter()
-            .map(|(c, _)| boundary_pass(c, &g, b.run_up, d, cleared_for_runup))
+            .map(|(c, _)| boundary_pass(c, &g, b.run_up, d, cleared_for_runup, mk))
             .collect(),
         None => Vec::new(),
     };
@@ -1495,7 +1496,7 @@ fn plan_band(
     ];
     let mut mirror = false;
     if m.pattern.is_spiral() {
-        rest_plan = spiral_rest(f, m, &g, d, spacing, s_b, true, &mut notes)?;
+        rest_plan = spiral_rest(f, m, &g, d, spacing, s_b, true, &mk.fit_scales, &mut notes)?;
     } else if !rest_polys.is_empty() {
         let oneway = (m.pattern == Pattern::OneWay).then_some(oneway_dir);
         // Parity (§4.3.3, figure 4.22): choose the line count and the first
@@ -1636,7 +1637,7 @@ fn plan_band(
                 d,
                 &g,
                 if bi == 0 { rest_plan.helix } else { None },
-                mk.spindle,
+                mk,
                 entry_kind,
             )
             .is_none()
@@ -1737,7 +1738,7 @@ fn plan_band(
         let blocks: Vec<Vec<DVec2>> = if bl.pattern.is_spiral() {
             let mut mm = m.clone();
             mm.pattern = bl.pattern;
-            spiral_rest(f, &mm, &g, d, so, s_b, false, &mut bnotes)?.blocks
+            spiral_rest(f, &mm, &g, d, so, s_b, false, &mk.fit_scales, &mut bnotes)?.blocks
         } else {
             let oneway = (bl.pattern == Pattern::OneWay).then_some(oneway_dir);
             parallel_blocks(
@@ -1768,7 +1769,7 @@ fn plan_band(
                 d,
                 &g,
                 None,
-                mk.spindle,
+                mk,
                 Kind::BottomFinish,
             )
             .is_none()
@@ -2089,7 +2090,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             if len < STEP {
                 continue;
             }
-            passes.push(boundary_pass(&part, &g2, run_up, d2, &cleared));
+            passes.push(boundary_pass(&part, &g2, run_up, d2, &cleared, mk));
         }
     }
     if passes.is_empty() {
@@ -2229,6 +2230,7 @@ fn spiral_rest(
     stepover: f64,
     s_b: f64,
     centred_helix: bool,
+    fit_scales: &[f64],
     notes: &mut Vec<String>,
 ) -> Result<RestPlan, String> {
     use thinplan_pocketing::{curvilinear_path, offset_path, Pocket, PocketParams};
@@ -2260,7 +2262,7 @@ fn spiral_rest(
     let mut res = res;
     if let (true, LevelEntry::Helix { radius, .. }, Some(_)) = (centred_helix, m.entry, res.center)
     {
-        let radii: Vec<f64> = [1.0, 0.5, 0.25].iter().map(|s| radius * d * s).collect();
+        let radii: Vec<f64> = fit_scales.iter().map(|s| radius * d * s).collect();
         if let Some((trimmed, h)) = res.after_centred_helix(&radii) {
             let fits = inside(h.center, &g.centre_polys)
                 && boundary_distance(h.center, &g.centre_polys) >= h.radius + 1e-6
@@ -2315,9 +2317,10 @@ fn enter(
     d: f64,
     g: &Geometry,
     centred: Option<(DVec2, f64)>,
-    spindle: SpindleDirection,
+    mk: &MethodKnowledge,
     kind: Kind,
 ) -> Option<()> {
+    let spindle = mk.spindle;
     if z_from - z <= 1e-12 {
         return Some(());
     }
@@ -2338,7 +2341,7 @@ fn enter(
     }
     if let LevelEntry::Helix { radius, .. } = entry {
         let p0 = block[0];
-        for s in [1.0, 0.5, 0.25] {
+        for s in &mk.fit_scales {
             let rho = radius * d * s;
             let c = p0 - DVec2::new(rho, 0.0);
             let fits = inside(c, &g.centre_polys)
