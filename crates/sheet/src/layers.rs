@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use glam::{DVec2, DVec3};
 use thinplan_plan::{Plan, Region3, StiffnessFeatureId};
 
-use crate::section::{self, Section};
+use crate::section::{self, Canvas, Section};
 use crate::{escape, num, owner_colour};
 
 fn region_colour(r: Region3) -> &'static str {
@@ -71,7 +71,7 @@ const REGIONS: [Region3; 5] = [
 /// A wall with no operations gives a picture that says so.
 pub fn layers_svg(plan: &Plan, feature_owner: StiffnessFeatureId) -> String {
     let section = Section::of(plan, feature_owner);
-    let Section { sf, n, w, wall, .. } = section;
+    let Section { n, w, wall, .. } = section;
     let sh = |p: DVec3| section.at(p);
     let (w_max, h_px) = (1000.0, 640.0);
     let feats: Vec<&thinplan_plan::MachiningFeature> =
@@ -150,32 +150,18 @@ pub fn layers_svg(plan: &Plan, feature_owner: StiffnessFeatureId) -> String {
         grow(p - DVec2::new(*r, 0.0));
         grow(p + DVec2::new(*r, 0.0));
     }
-    if !(lo.is_finite() && hi.is_finite()) {
-        lo = DVec2::new(-10.0, 0.0);
-        hi = DVec2::new(10.0, 10.0);
-    }
-    let (ml, mr, mt, mb) = (60.0, 240.0, 50.0, 40.0);
-    let size = (hi - lo).max(DVec2::splat(1e-6));
-    let scale = ((w_max - ml - mr) / size.x).min((h_px - mt - mb) / size.y);
-    // As wide as the section needs, but room for the title.
-    let w_px = (ml + mr + size.x * scale).clamp(820.0, w_max).round();
-    let map = |p: DVec2| DVec2::new(ml + (p.x - lo.x) * scale, h_px - mb - (p.y - lo.y) * scale);
-
+    let c = Canvas::fit(lo, hi, (60.0, 240.0, 50.0, 40.0), w_max, h_px);
+    let (w_px, scale, mr, mt) = (c.w_px, c.scale, c.mr, c.mt);
+    let map = |p: DVec2| c.map(p);
+    let title = section.title(
+        feature_owner,
+        &format!(
+            "operation layers in a section across the wall ({} operation(s))",
+            ops.len()
+        ),
+    );
     let mut s = String::new();
-    let title = match sf {
-        Some(f) => {
-            let role = f
-                .role
-                .map_or(String::new(), |r| format!(" {r:?}").to_lowercase());
-            format!(
-                "{}{role}: operation layers in a section across the wall ({} operation(s))",
-                f.id,
-                ops.len()
-            )
-        }
-        None => format!("{feature_owner}: no such stiffness feature"),
-    };
-    section::frame(&mut s, (w_px, h_px), (ml, mr), &title, n, (lo, hi), &map);
+    section::frame(&mut s, &c, &title, n);
     // Machining features.
     for (id, a, b) in &feat_boxes {
         let (pa, pb) = (map(*a), map(*b));

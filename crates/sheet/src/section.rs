@@ -71,6 +71,19 @@ impl<'p> Section<'p> {
         section
     }
 
+    /// A picture's title: the wall and its role, then `what`.
+    pub fn title(&self, owner: StiffnessFeatureId, what: &str) -> String {
+        match self.sf {
+            Some(f) => {
+                let role = f
+                    .role
+                    .map_or(String::new(), |r| format!(" {r:?}").to_lowercase());
+                format!("{}{role}: {what}", f.id)
+            }
+            None => format!("{owner}: no such stiffness feature"),
+        }
+    }
+
     /// A point in the section.
     pub fn at(&self, p: DVec3) -> DVec2 {
         DVec2::new(p.dot(self.n) - self.centre, p.dot(self.up))
@@ -88,19 +101,65 @@ impl<'p> Section<'p> {
     }
 }
 
+/// The section's box `lo`–`hi` fitted into a picture `w_max` wide at most
+/// and `h_px` tall inside the margins (left, right, top, bottom): as wide as
+/// the section needs, but room for the title. An empty box becomes
+/// 20 × 10 mm.
+pub(crate) struct Canvas {
+    pub lo: DVec2,
+    pub hi: DVec2,
+    pub w_px: f64,
+    pub h_px: f64,
+    pub ml: f64,
+    pub mr: f64,
+    pub mt: f64,
+    pub mb: f64,
+    /// Pixels per mm.
+    pub scale: f64,
+}
+
+impl Canvas {
+    pub fn fit(
+        mut lo: DVec2,
+        mut hi: DVec2,
+        (ml, mr, mt, mb): (f64, f64, f64, f64),
+        w_max: f64,
+        h_px: f64,
+    ) -> Canvas {
+        if !(lo.is_finite() && hi.is_finite()) {
+            lo = DVec2::new(-10.0, 0.0);
+            hi = DVec2::new(10.0, 10.0);
+        }
+        let size = (hi - lo).max(DVec2::splat(1e-6));
+        let scale = ((w_max - ml - mr) / size.x).min((h_px - mt - mb) / size.y);
+        let w_px = (ml + mr + size.x * scale).clamp(820.0, w_max).round();
+        Canvas {
+            lo,
+            hi,
+            w_px,
+            h_px,
+            ml,
+            mr,
+            mt,
+            mb,
+            scale,
+        }
+    }
+
+    /// A section point in pixels.
+    pub fn map(&self, p: DVec2) -> DVec2 {
+        DVec2::new(
+            self.ml + (p.x - self.lo.x) * self.scale,
+            self.h_px - self.mb - (p.y - self.lo.y) * self.scale,
+        )
+    }
+}
+
 /// The picture's frame: the `<svg>` element on white, the title, the axes'
 /// meaning (the section's horizontal direction `n`), and height ticks every
-/// 10 mm (1 mm for small pictures) between `lo` and `hi`, mapped by `map`.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn frame(
-    s: &mut String,
-    (w_px, h_px): (f64, f64),
-    (ml, mr): (f64, f64),
-    title: &str,
-    n: DVec3,
-    (lo, hi): (DVec2, DVec2),
-    map: &impl Fn(DVec2) -> DVec2,
-) {
+/// 10 mm (1 mm for small pictures) over the canvas's box.
+pub(crate) fn frame(s: &mut String, c: &Canvas, title: &str, n: DVec3) {
+    let (w_px, h_px, ml, mr, lo, hi) = (c.w_px, c.h_px, c.ml, c.mr, c.lo, c.hi);
     let _ = writeln!(
         s,
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w_px}\" height=\"{h_px}\" viewBox=\"0 0 {w_px} {h_px}\" font-family=\"sans-serif\" font-size=\"12\">"
@@ -122,7 +181,7 @@ pub(crate) fn frame(
     let step = if hi.y - lo.y > 30.0 { 10.0 } else { 1.0 };
     let mut z = (lo.y / step).ceil() * step;
     while z <= hi.y + 1e-9 {
-        let p = map(DVec2::new(lo.x, z));
+        let p = c.map(DVec2::new(lo.x, z));
         let _ = writeln!(
             s,
             "<path d=\"M{} {} H{}\" stroke=\"#eee\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\" fill=\"#555\">{}</text>",

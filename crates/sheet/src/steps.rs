@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use glam::DVec2;
 use thinplan_plan::{Plan, StiffnessFeatureId};
 
-use crate::section::{self, Section};
+use crate::section::{self, Canvas, Section};
 use crate::{escape, num, owner_colour};
 
 /// What a feature is, from the knowledge block that made it.
@@ -54,39 +54,18 @@ pub fn wall_steps_svg(plan: &Plan, owner: StiffnessFeatureId) -> String {
         lo = lo.min(a);
         hi = hi.max(b);
     }
-    if !(lo.is_finite() && hi.is_finite()) {
-        lo = DVec2::new(-10.0, 0.0);
-        hi = DVec2::new(10.0, 10.0);
-    }
-    let (ml, mr, mt, mb, w_max, h_px) = (60.0, 300.0, 50.0, 30.0, 1100.0, 640.0);
-    let size = (hi - lo).max(DVec2::splat(1e-6));
-    let scale = ((w_max - ml - mr) / size.x).min((h_px - mt - mb) / size.y);
-    let w_px = (ml + mr + size.x * scale).clamp(820.0, w_max).round();
-    let map = |p: DVec2| DVec2::new(ml + (p.x - lo.x) * scale, h_px - mb - (p.y - lo.y) * scale);
-
-    let title = match section.sf {
-        Some(f) => {
-            let role = f
-                .role
-                .map_or(String::new(), |r| format!(" {r:?}").to_lowercase());
-            format!(
-                "{}{role}: {} machining feature(s) in a section across the wall, numbered in machining order",
-                f.id,
-                order.len()
-            )
-        }
-        None => format!("{owner}: no such stiffness feature"),
-    };
-    let mut s = String::new();
-    section::frame(
-        &mut s,
-        (w_px, h_px),
-        (ml, mr),
-        &title,
-        section.n,
-        (lo, hi),
-        &map,
+    let c = Canvas::fit(lo, hi, (60.0, 300.0, 50.0, 30.0), 1100.0, 640.0);
+    let (w_px, h_px, mr, mt, mb) = (c.w_px, c.h_px, c.mr, c.mt, c.mb);
+    let map = |p: DVec2| c.map(p);
+    let title = section.title(
+        owner,
+        &format!(
+            "{} machining feature(s) in a section across the wall, numbered in machining order",
+            order.len()
+        ),
     );
+    let mut s = String::new();
+    section::frame(&mut s, &c, &title, section.n);
     let colour = owner_colour(owner);
     // Pieces of one feature along the wall (stage 6 splits) share a box in
     // the section: one box, all their places.
