@@ -110,6 +110,7 @@ mod tests {
                 region: Region3::Rest,
             }],
             provenance: Provenance::new(ProvenanceSource::Default, "test"),
+            link_z: None,
         });
         plan
     }

@@ -183,6 +183,18 @@ fn samples_are_listed_and_each_inspects() {
     }
 }
 
+/// A copy of the shipped knowledge under `d` with `from` replaced by `to`
+/// in `file` (which must contain it).
+fn knowledge_with(d: &Path, file: &str, from: &str, to: &str) -> PathBuf {
+    let k = d.join("knowledge");
+    copy_dir(&repo().join("knowledge"), &k);
+    let f = k.join(file);
+    let text = std::fs::read_to_string(&f).unwrap();
+    assert!(text.contains(from), "{file} has no `{from}`");
+    std::fs::write(&f, text.replace(from, to)).unwrap();
+    k
+}
+
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {
@@ -825,16 +837,12 @@ fn plan_until_features_draws_each_wall_and_explain_reads_the_provenance() {
 #[test]
 fn a_tighter_allowed_deflection_in_sizing_ron_makes_more_careful_steps() {
     let d = tmp("sizing");
-    let k = d.join("knowledge");
-    copy_dir(&repo().join("knowledge"), &k);
-    let sizing = k.join("sizing.ron");
-    let text = std::fs::read_to_string(&sizing).unwrap();
-    assert!(text.contains("allowed_deflection: 0.01,"));
-    std::fs::write(
-        &sizing,
-        text.replace("allowed_deflection: 0.01,", "allowed_deflection: 0.002,"),
-    )
-    .unwrap();
+    let k = knowledge_with(
+        &d,
+        "sizing.ron",
+        "allowed_deflection: 0.01,",
+        "allowed_deflection: 0.002,",
+    );
     let mut plans = Vec::new();
     for (tag, knowledge) in [("base", None), ("tight", Some(&k))] {
         let out = d.join(format!("{tag}.plan.json"));
@@ -889,4 +897,113 @@ fn a_tighter_allowed_deflection_in_sizing_ron_makes_more_careful_steps() {
         (half.len() > base.len() && max_of(&half, "big_h") < max_of(&base, "big_h"))
             || max_of(&half, "b_rf") > max_of(&base, "b_rf")
     );
+}
+
+/// Links on the in-process stock (`methods.links: InProcessStock`, stage 8)
+/// against links over the whole stock's top (`OverTheTop`), on one sample,
+/// both replayed by the independent stock simulation: the same material
+/// comes off (the cutting moves are the same), no rapid enters stock and no
+/// holder or shank touches it (links between operations included), and the
+/// program's rapids are markedly shorter.
+#[test]
+fn links_on_the_in_process_stock_run_lower_and_never_into_stock() {
+    let d = tmp("links");
+    let k = knowledge_with(
+        &d,
+        "methods.ron",
+        "links: InProcessStock,",
+        "links: OverTheTop,",
+    );
+    let name = "chamfered_rib";
+    let mut sims = Vec::new();
+    let mut plans = Vec::new();
+    for (tag, knowledge) in [("stock", None), ("top", Some(&k))] {
+        let (ngc, tbl, plan) = (
+            d.join(format!("{tag}.ngc")),
+            d.join(format!("{tag}.tbl")),
+            d.join(format!("{tag}.plan.json")),
+        );
+        let mut cmd = thinplan();
+        cmd.args(["plan", &format!("builtin:{name}"), "--json", "--out"])
+            .arg(&plan)
+            .arg("--gcode")
+            .arg(&ngc)
+            .arg("--tool-table")
+            .arg(&tbl);
+        if let Some(k) = knowledge {
+            cmd.arg("--knowledge").arg(k);
+        }
+        let (code, v) = run_json(&mut cmd);
+        assert_eq!(code, 0, "{tag}: {v}");
+        assert_eq!(
+            v["collisions"].as_array().unwrap().len(),
+            0,
+            "{tag}: {}",
+            v["collisions"]
+        );
+        let out = thinplan()
+            .args(["simulate", &format!("builtin:{name}")])
+            .arg(&ngc)
+            .arg("--tool-table")
+            .arg(&tbl)
+            .arg("--json")
+            .output()
+            .unwrap();
+        let s: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(s["gouges"]["cells"], 0, "{tag}: {}", s["gouges"]);
+        assert_eq!(
+            s["crashes"].as_array().unwrap().len(),
+            0,
+            "{tag}: {}",
+            s["crashes"]
+        );
+        sims.push(s);
+        plans.push(thinplan_plan::load(&plan).unwrap());
+    }
+    let (low, high) = (&sims[0], &sims[1]);
+    let num = |v: &Value, a: &str, b: &str| v[a][b].as_f64().unwrap();
+    let removed = |v: &Value| v["removed_volume_mm3"].as_f64().unwrap();
+    assert!(
+        (removed(low) - removed(high)).abs() < 1e-6,
+        "{} vs {}",
+        removed(low),
+        removed(high)
+    );
+    for (a, b) in [
+        ("leftover_missed", "volume_mm3"),
+        ("leftover_unreachable", "volume_mm3"),
+    ] {
+        assert!(
+            (num(low, a, b) - num(high, a, b)).abs() < 1e-6,
+            "{a}: {low} vs {high}"
+        );
+    }
+    let (rl, rh) = (
+        num(low, "program", "rapid_length_mm"),
+        num(high, "program", "rapid_length_mm"),
+    );
+    let (fl, fh) = (
+        num(low, "program", "feed_length_mm"),
+        num(high, "program", "feed_length_mm"),
+    );
+    println!("rapids {rh:.0} → {rl:.0} mm, feed {fh:.0} → {fl:.0} mm");
+    assert!(rl < 0.9 * rh, "rapids {rh} → {rl}");
+    // Descents may start lower, so the fed part of them can only shrink.
+    assert!(fl <= fh + 1e-6, "feed {fh} → {fl}");
+    // Every link the post would have taken over its clearance height
+    // between two operations of one tool is planned on the stock.
+    let (stock, top) = (&plans[0], &plans[1]);
+    assert!(top.operations.iter().all(|o| o.link_z.is_none()));
+    let planned = stock
+        .operations
+        .iter()
+        .filter(|o| o.link_z.is_some())
+        .count();
+    let lowered: f64 = stock
+        .operations
+        .iter()
+        .filter_map(|o| o.provenance.values.get("links_lowered"))
+        .sum();
+    println!("{planned} links between operations planned, {lowered} inside lowered");
+    assert!(planned > 0 && lowered > 0.0);
 }

@@ -81,8 +81,11 @@ impl std::fmt::Display for Against {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Collision {
     pub operation: OperationId,
-    /// Index into the operation's `moves`.
+    /// Index into the operation's `moves` (0 for the link).
     pub move_index: usize,
+    /// The move is the link stage 8 planned from the previous operation
+    /// (`Operation::link_z`), not one of the operation's own moves.
+    pub link: bool,
     pub what: ToolPart,
     /// Tool tip (part coordinates) where the overlap is deepest.
     pub position: DVec3,
@@ -638,6 +641,8 @@ fn check_with_part(plan: &Plan, k: &Knowledge, frame: &Frame, part: &[Body], rep
             f.2 = usize::MAX;
         }
     }
+    // Where the previous operation ended, for links planned on the stock.
+    let mut last_end: Option<DVec3> = None;
     for id in &plan.operation_order {
         let Some(op) = ops.get(id) else {
             report
@@ -658,8 +663,23 @@ fn check_with_part(plan: &Plan, k: &Knowledge, frame: &Frame, part: &[Body], rep
             continue;
         }
         let cyl = cylinders(tool);
-        let mut prev = frame.to_local(op.start);
-        for (mi, mv) in op.moves.iter().enumerate() {
+        // The planned link from the previous operation's end, then the moves.
+        let link = op.link_z.and(last_end).map(|_| thinplan_plan::PathMove {
+            to: op.start,
+            arc: None,
+            feed: 0.0,
+            region: Region3::Rapid,
+        });
+        let mut prev = match (&link, last_end) {
+            (Some(_), Some(e)) => frame.to_local(e),
+            _ => frame.to_local(op.start),
+        };
+        last_end = Some(op.moves.last().map_or(op.start, |m| m.to));
+        let moves = link
+            .iter()
+            .map(|m| (None, m))
+            .chain(op.moves.iter().enumerate().map(|(i, m)| (Some(i), m)));
+        for (mi, mv) in moves {
             let to = frame.to_local(mv.to);
             let pts: Vec<DVec3> = match &mv.arc {
                 Some(a) => thinplan_post::linearise_arc(
@@ -737,7 +757,8 @@ fn check_with_part(plan: &Plan, k: &Knowledge, frame: &Frame, part: &[Body], rep
                                     (what, body.against),
                                     Collision {
                                         operation: *id,
-                                        move_index: mi,
+                                        move_index: mi.unwrap_or(0),
+                                        link: mi.is_none(),
                                         what,
                                         position: frame.to_world(at),
                                         penetration: pen,
@@ -782,15 +803,19 @@ pub fn collisions_json(collisions: &[Collision]) -> Value {
         collisions
             .iter()
             .map(|c| {
-                json!({
+                let mut v = json!({
                     "operation": c.operation.to_string(),
-                    "move": c.move_index,
+                    "move": if c.link { Value::Null } else { json!(c.move_index) },
                     "what": c.what.name(),
                     "position": [round6(c.position.x), round6(c.position.y), round6(c.position.z)],
                     "penetration": round6(c.penetration),
                     "lift": round6(c.lift),
                     "against": c.against.to_string(),
-                })
+                });
+                if c.link {
+                    v["link"] = Value::Bool(true);
+                }
+                v
             })
             .collect(),
     )

@@ -64,6 +64,7 @@ fn a_short_stickout_brings_the_holder_onto_the_rib_of_a_handmade_path() {
             mv([80.0, 31.5, 150.0], Region3::Rapid),
         ],
         provenance: Provenance::new(ProvenanceSource::User, "test"),
+        link_z: None,
     });
     plan.operation_order = vec![OperationId(0)];
     let c = check_holders(&plan, &k, &s.brep);
@@ -256,6 +257,7 @@ fn a_short_holder_hits_a_tall_unremoved_feature_and_not_once_it_is_removed() {
         start: world(mid.x, mid.y, body.z_hi + 100.0),
         moves,
         provenance: Provenance::new(ProvenanceSource::User, "test"),
+        link_z: None,
     };
     let down = |p: DVec3| mv(p.to_array(), Region3::Link);
     let mut plan = Plan::new(s.plan.part.clone(), s.plan.setup.clone());

@@ -95,6 +95,7 @@ fn big_plan(base: &Plan) -> Plan {
             start: DVec3::new(0.0, 0.0, z + 5.0),
             moves,
             provenance: Provenance::new(ProvenanceSource::User, "bench"),
+            link_z: None,
         });
     }
     plan

@@ -40,9 +40,22 @@ pub struct MethodKnowledge {
     /// The quarter circle that leads a boundary pass off into cleared
     /// space, radius a fraction of D.
     pub run_off_radius: f64,
+    /// How high links that leave cleared space run (stage 8).
+    pub links: LinkHeight,
     /// The methods, tried in order: the first whose `applies` matches a
     /// feature is used.
     pub methods: Vec<Method>,
+}
+
+/// The height of links that leave cleared space (issue 5, item 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LinkHeight {
+    /// Over the top of the whole stock plus `safe_clearance`.
+    OverTheTop,
+    /// At the lowest height the in-process stock allows: `safe_clearance`
+    /// above the highest stock under the tool, its shank and its holder
+    /// along the link, as the operations before it leave it.
+    InProcessStock,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -16,6 +16,7 @@
 mod free;
 pub mod geom;
 mod layers;
+pub mod links;
 pub mod order;
 pub mod path;
 pub mod precedence;
@@ -119,25 +120,13 @@ pub fn operations(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsEr
 
 /// Stage 7 without the stage check (synthetic plans in tests and tools).
 pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError> {
-    let unknown = |what: &'static str, id: &str| OperationsError::UnknownResource {
-        what,
-        id: id.to_string(),
-    };
-    let machine = k
-        .machine(&plan.setup.machine)
-        .ok_or_else(|| unknown("machine", &plan.setup.machine))?;
-    let tools = k
-        .tool_set(&plan.setup.tool_set)
-        .ok_or_else(|| unknown("tool set", &plan.setup.tool_set))?;
-    let material = k
-        .material(&plan.setup.material)
-        .ok_or_else(|| unknown("material", &plan.setup.material))?;
-    let limits = MachineLimits {
-        v_max: [machine.x.v_max, machine.y.v_max, machine.z.v_max],
-        a_max: [machine.x.a_max, machine.y.a_max, machine.z.a_max],
-        a_centripetal: machine.a_centripetal,
-        corner_angle_deg: k.methods.corner_angle_deg,
-    };
+    let (machine, tools, limits) = resources(plan, k)?;
+    let material =
+        k.material(&plan.setup.material)
+            .ok_or_else(|| OperationsError::UnknownResource {
+                what: "material",
+                id: plan.setup.material.clone(),
+            })?;
     // Links that leave a feature's footprint clear every feature's top.
     let up = plan.setup.up.normalize_or_zero();
     let global_top = plan
@@ -396,6 +385,65 @@ fn unreachable_provenance(volume: f64, seen: bool) -> Provenance {
     p
 }
 
+/// The set-up's machine and tool set from the knowledge, and the machine's
+/// limits for the time model.
+fn resources<'k>(
+    plan: &Plan,
+    k: &'k Knowledge,
+) -> Result<
+    (
+        &'k thinplan_knowledge::Machine,
+        &'k thinplan_knowledge::ToolSet,
+        MachineLimits,
+    ),
+    OperationsError,
+> {
+    let unknown = |what: &'static str, id: &str| OperationsError::UnknownResource {
+        what,
+        id: id.to_string(),
+    };
+    let machine = k
+        .machine(&plan.setup.machine)
+        .ok_or_else(|| unknown("machine", &plan.setup.machine))?;
+    let tools = k
+        .tool_set(&plan.setup.tool_set)
+        .ok_or_else(|| unknown("tool set", &plan.setup.tool_set))?;
+    Ok((machine, tools, machine_limits(machine, k)))
+}
+
+/// The machine's limits for the time model.
+fn machine_limits(machine: &thinplan_knowledge::Machine, k: &Knowledge) -> MachineLimits {
+    MachineLimits {
+        v_max: [machine.x.v_max, machine.y.v_max, machine.z.v_max],
+        a_max: [machine.x.a_max, machine.y.a_max, machine.z.a_max],
+        a_centripetal: machine.a_centripetal,
+        corner_angle_deg: k.methods.corner_angle_deg,
+    }
+}
+
+/// Length (mm) and time (s) of local moves from `start`, each with its
+/// speed cap (mm/s), under `limits`: the one time model of every operation.
+fn length_and_time<'a>(
+    start: DVec3,
+    moves: impl Iterator<Item = (&'a LMove, f64)>,
+    limits: &MachineLimits,
+) -> (f64, f64) {
+    let mut from = start;
+    let mut length = 0.0;
+    let mut pts = vec![start];
+    let mut caps = Vec::new();
+    for (m, cap) in moves {
+        length += path::move_length(from, m);
+        for p in path::move_points(from, m, 1.0) {
+            pts.push(p);
+            caps.push(cap);
+        }
+        from = m.to;
+    }
+    let time = thinplan_feeds::schedule_polyline(&pts, &caps, limits).total_time;
+    (length, time)
+}
+
 /// A local operation mapped to part coordinates with its feeds and time.
 fn to_operation(
     id: OperationId,
@@ -424,22 +472,17 @@ fn to_operation(
         Kind::Rapid => Region3::Rapid,
     };
     let mut moves = Vec::with_capacity(lo.moves.len());
-    let mut from = lo.start;
-    let mut length = 0.0;
-    let mut pts = vec![lo.start];
-    let mut caps = Vec::new();
     let rapid_cap = env.limits.v_max.iter().copied().fold(0.0, f64::max);
-    for m in &lo.moves {
-        length += path::move_length(from, m);
-        let cap = if m.kind == Kind::Rapid {
+    let cap = |m: &LMove| {
+        if m.kind == Kind::Rapid {
             rapid_cap
         } else {
             feed(m.kind) / 60.0
-        };
-        for p in path::move_points(from, m, 1.0) {
-            pts.push(p);
-            caps.push(cap);
         }
+    };
+    let (length, time) =
+        length_and_time(lo.start, lo.moves.iter().map(|m| (m, cap(m))), &env.limits);
+    for m in &lo.moves {
         moves.push(PathMove {
             to: to_part(m.to),
             arc: m.arc.map(|(c, ccw)| ArcMove {
@@ -450,9 +493,7 @@ fn to_operation(
             feed: feed(m.kind),
             region: region(m.kind),
         });
-        from = m.to;
     }
-    let time = thinplan_feeds::schedule_polyline(&pts, &caps, &env.limits).total_time;
     let mut prov = lo.provenance;
     prov.values.insert("length_mm".into(), length);
     prov.values.insert("time_s".into(), time);
@@ -466,6 +507,7 @@ fn to_operation(
         start: to_part(lo.start),
         moves,
         provenance: prov,
+        link_z: None,
     }
 }
 

@@ -21,6 +21,7 @@ fn op(id: u32, feature: u32, tool: &str, x: f64) -> Operation {
         start: DVec3::new(x, 0.0, 0.0),
         moves: vec![],
         provenance: Provenance::new(ProvenanceSource::Default, "t"),
+        link_z: None,
     }
 }
 

@@ -353,6 +353,20 @@ impl Session {
                 let order = thinplan_operations::order(&self.plan, &self.knowledge)
                     .map_err(|e| PipelineError::new(ErrorKind::Stage, e.to_string()))?;
                 thinplan_operations::order::apply_order(&mut self.plan, order);
+                let b = self.brep.bbox();
+                let links = thinplan_operations::links::lower_links(
+                    &mut self.plan,
+                    &self.knowledge,
+                    (b.min, b.max),
+                )
+                .map_err(|e| PipelineError::new(ErrorKind::Stage, e.to_string()))?;
+                if !links.skipped.is_empty() {
+                    self.warnings.push(format!(
+                        "links: {} operation(s) not followed on the in-process stock (tool axis not the \
+                         set-up's up, or tool not in the set); their links stay over the stock's top",
+                        links.skipped.len()
+                    ));
+                }
                 Ok(())
             }
             Stage::Output => Err(PipelineError::new(

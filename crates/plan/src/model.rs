@@ -441,6 +441,13 @@ pub struct Operation {
     pub start: DVec3,
     pub moves: Vec<PathMove>,
     pub provenance: Provenance,
+    /// Where stage 8 planned the link from the previous operation (same
+    /// tool) on the in-process stock: the height along up (part
+    /// coordinates) of the straight rapid from that operation's end to
+    /// `start`, both at this height. `None`: the post links over its
+    /// clearance height.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub link_z: Option<f64>,
 }
 
 /// A decision the planner considered and did not take.

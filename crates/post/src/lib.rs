@@ -159,9 +159,16 @@ pub fn post(plan: &Plan, post: &PostProcessor, tools: &ToolSet) -> Result<NcProg
             coolant_on = true;
         }
         // Link to the operation's start over the clearance height, unless
-        // the previous operation (same tool) ended exactly there.
+        // the previous operation (same tool) ended exactly there, or stage 8
+        // planned the link on the in-process stock (straight across at
+        // `link_z`, where the previous operation ended).
         let continues = !change && last_end.is_some_and(|e| e.distance(op.start) < 1e-9);
-        if !continues {
+        let planned = op.link_z.filter(|_| !change && last_end.is_some());
+        if let (false, Some(z)) = (continues, planned) {
+            w.rapid(DVec3::new(f64::NAN, f64::NAN, z));
+            w.rapid(DVec3::new(op.start.x, op.start.y, z));
+            w.rapid(op.start);
+        } else if !continues {
             w.rapid(DVec3::new(f64::NAN, f64::NAN, clearance_z));
             w.rapid(DVec3::new(op.start.x, op.start.y, clearance_z));
             w.rapid(op.start);

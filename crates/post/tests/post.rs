@@ -445,3 +445,71 @@ proptest! {
         }
     }
 }
+
+/// A link stage 8 planned on the in-process stock (`link_z`, same tool) is
+/// one rapid straight across at that height; without it, or across a tool
+/// change, the post climbs over its clearance height.
+#[test]
+fn a_planned_link_runs_straight_across_at_its_height() {
+    let k = knowledge();
+    let two = |link_z: Option<f64>, tool2: &str| {
+        let mut plan = empty_plan();
+        let mut second = op(
+            2,
+            tool2,
+            8000.0,
+            [50.0, 0.0, 2.0],
+            vec![line(50.0, 0.0, -1.0, 300.0), line(50.0, 0.0, 2.0, 0.0)],
+        );
+        second.link_z = link_z;
+        plan.operations = vec![
+            op(
+                1,
+                "em20",
+                8000.0,
+                [0.0, 0.0, 2.0],
+                vec![line(0.0, 0.0, -1.0, 300.0), line(0.0, 0.0, 2.0, 0.0)],
+            ),
+            second,
+        ];
+        post(
+            &plan,
+            k.post("linuxcnc").unwrap(),
+            k.tool_set("endmills_12_20").unwrap(),
+        )
+        .unwrap()
+    };
+    // Between OP1 and OP2's comment lines.
+    let between = |text: &str| -> Vec<String> {
+        let a = text.find("(OP2").unwrap();
+        let b = text[a..].find("G1").unwrap();
+        text[a..a + b]
+            .lines()
+            .filter(|l| l.starts_with("G0"))
+            .map(str::to_string)
+            .collect()
+    };
+    let planned = two(Some(2.0), "em20");
+    assert_eq!(between(&planned.text), ["G0 X50.000"], "{}", planned.text);
+    let over = two(None, "em20");
+    assert_eq!(
+        between(&over.text),
+        ["G0 Z12.000", "G0 X50.000", "G0 Z2.000"],
+        "{}",
+        over.text
+    );
+    assert!((over.rapid_length_mm - planned.rapid_length_mm - 20.0).abs() < 1e-9);
+    // A tool change ignores the planned link.
+    let changed = two(Some(2.0), "em12");
+    assert_eq!(
+        between(&changed.text),
+        ["G0 X50.000", "G0 Z2.000"],
+        "{}",
+        changed.text
+    );
+    assert!(
+        changed.text.contains("G0 Z12.000\nM5\nM9\nT1 M6"),
+        "{}",
+        changed.text
+    );
+}

@@ -73,6 +73,7 @@ pub fn op(id: u32, tool: &str, rpm: f64, start: [f64; 3], moves: Vec<PathMove>) 
         start: DVec3::from(start),
         moves,
         provenance: Provenance::new(ProvenanceSource::Default, "test"),
+        link_z: None,
     }
 }
 

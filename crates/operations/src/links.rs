@@ -1,0 +1,751 @@
+//! Stage 8, second step: links at the lowest safe height the in-process
+//! stock allows (issue 5, item 4; thesis §5.4.3).
+//!
+//! Stage 7 takes every link that leaves a feature's cleared space over the
+//! top of the whole stock: it cannot know what the operations before leave
+//! behind (corners no tool reaches, features refused or not yet cut). Once
+//! the order is known, this step replays the operations on a height map of
+//! the in-process stock and lowers each such link (rapid up, across, down),
+//! and the link between consecutive operations of one tool, to
+//! `methods.safe_clearance` above the highest stock under the tool, its
+//! shank and its holder along the link (`methods.links: InProcessStock`).
+//!
+//! The height map errs towards material: it starts at the top of the part's
+//! box and of every machining feature's box, and a cell is lowered only where
+//! the tool's flat bottom covers all of it (to the tip's height) or its
+//! corner radius does (to the tip plus that radius), and only if its stock
+//! did not stand above the flutes. So no cell is ever lower than the real
+//! stock in it, whatever the tool paths leave — leftovers need no model of
+//! their own. Links only ever move down from where stage 7 and the post
+//! put them, and the independent stock simulation checks that no rapid
+//! enters stock.
+
+use std::collections::BTreeMap;
+
+use glam::{DVec2, DVec3};
+use thinplan_knowledge::{Knowledge, LinkHeight, Tool};
+use thinplan_plan::{Operation, OperationId, PathMove, Plan, Region3};
+
+use crate::path::{move_points, LMove};
+use crate::{length_and_time, resources, Kind, OperationsError};
+
+/// Side of a height-map cell, mm. Any size is safe (cells err towards
+/// material); finer cells let links run lower beside walls.
+const CELL: f64 = 1.0;
+/// Arcs are followed by chords at most this long, mm; a chord strays at most
+/// half of it from its arc, which the cut radius gives up.
+const CHORD: f64 = 0.5;
+/// Longest piece a segment is cut into for the map, mm (bounds the box of
+/// cells each piece visits).
+const PIECE: f64 = 4.0;
+/// A link lowered by less than this (mm) is left where it was.
+const MIN_GAIN: f64 = 1e-3;
+
+/// What lowering did, for the report.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LinkReport {
+    /// Links inside operations (rapid up, across, down) that were lowered.
+    pub inside: usize,
+    /// Links between operations of one tool that were lowered.
+    pub between: usize,
+    /// Operations the map could not follow (tool axis not the set-up's up,
+    /// tool not in the set): their links stay, and the stock they cut is
+    /// taken as still there.
+    pub skipped: Vec<OperationId>,
+}
+
+/// Plan view along the set-up's up: x, y across it, z along it.
+struct View {
+    ex: DVec3,
+    ey: DVec3,
+    up: DVec3,
+}
+
+impl View {
+    fn new(up: DVec3) -> Self {
+        let up = up.normalize_or_zero();
+        let seed = if up.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+        let ex = (seed - up * seed.dot(up)).normalize_or_zero();
+        View {
+            ex,
+            ey: up.cross(ex),
+            up,
+        }
+    }
+    fn xy(&self, p: DVec3) -> DVec2 {
+        DVec2::new(p.dot(self.ex), p.dot(self.ey))
+    }
+    fn z(&self, p: DVec3) -> f64 {
+        p.dot(self.up)
+    }
+}
+
+/// Highest point of the stock in each cell, along up; outside the map: air.
+struct HeightMap {
+    lo: DVec2,
+    nx: usize,
+    ny: usize,
+    h: Vec<f64>,
+}
+
+impl HeightMap {
+    fn new(lo: DVec2, hi: DVec2) -> Self {
+        let nx = (((hi.x - lo.x) / CELL).ceil().max(1.0)) as usize;
+        let ny = (((hi.y - lo.y) / CELL).ceil().max(1.0)) as usize;
+        HeightMap {
+            lo,
+            nx,
+            ny,
+            h: vec![f64::NEG_INFINITY; nx * ny],
+        }
+    }
+
+    fn centre(&self, i: usize, j: usize) -> DVec2 {
+        self.lo + DVec2::new((i as f64 + 0.5) * CELL, (j as f64 + 0.5) * CELL)
+    }
+
+    /// Cells whose centre may lie within `reach` of segment a–b.
+    fn cells(&self, a: DVec2, b: DVec2, reach: f64) -> (usize, usize, usize, usize) {
+        let lo = (a.min(b) - DVec2::splat(reach) - self.lo) / CELL;
+        let hi = (a.max(b) + DVec2::splat(reach) - self.lo) / CELL;
+        let clamp = |v: f64, n: usize| (v.floor().max(0.0) as usize).min(n);
+        (
+            clamp(lo.x, self.nx),
+            clamp(hi.x + 1.0, self.nx),
+            clamp(lo.y, self.ny),
+            clamp(hi.y + 1.0, self.ny),
+        )
+    }
+
+    /// Stock up to `top` over the box `lo`–`hi` (plan view).
+    fn raise_box(&mut self, lo: DVec2, hi: DVec2, top: f64) {
+        let half = 0.5 * CELL;
+        let (i0, i1, j0, j1) = self.cells(lo, hi, half);
+        for j in j0..j1 {
+            for i in i0..i1 {
+                let c = self.centre(i, j);
+                // Every cell the box touches.
+                if c.x + half >= lo.x
+                    && c.x - half <= hi.x
+                    && c.y + half >= lo.y
+                    && c.y - half <= hi.y
+                {
+                    let k = j * self.nx + i;
+                    self.h[k] = self.h[k].max(top);
+                }
+            }
+        }
+    }
+
+    /// The tool tip moved from `a` to `b` at heights up to `z`: cells wholly
+    /// under its flat bottom drop to `z`, cells wholly under its corner to
+    /// `z + rc`, unless their stock stood above the flutes.
+    fn cut(&mut self, a: DVec2, b: DVec2, z: f64, tool: &Tool) {
+        let r = 0.5 * tool.diameter;
+        let rc = tool.corner_radius.clamp(0.0, r);
+        let slack = CELL * std::f64::consts::FRAC_1_SQRT_2 + 0.5 * CHORD;
+        let r_all = r - slack;
+        if r_all <= 0.0 {
+            return;
+        }
+        let r_flat = r - rc - slack;
+        for (p, q) in pieces(a, b) {
+            let (i0, i1, j0, j1) = self.cells(p, q, r_all);
+            for j in j0..j1 {
+                for i in i0..i1 {
+                    let d = crate::geom::dist_point_seg(self.centre(i, j), p, q);
+                    let new = if d <= r_flat {
+                        z
+                    } else if d <= r_all {
+                        z + rc
+                    } else {
+                        continue;
+                    };
+                    let k = j * self.nx + i;
+                    if self.h[k] <= z + tool.flute_length {
+                        self.h[k] = self.h[k].min(new);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Highest stock in any cell that a disc of radius `rho` swept from `a`
+    /// to `b` may touch.
+    fn highest(&self, a: DVec2, b: DVec2, rho: f64) -> f64 {
+        let reach = rho + CELL * std::f64::consts::FRAC_1_SQRT_2;
+        let mut top = f64::NEG_INFINITY;
+        for (p, q) in pieces(a, b) {
+            let (i0, i1, j0, j1) = self.cells(p, q, reach);
+            for j in j0..j1 {
+                for i in i0..i1 {
+                    let k = j * self.nx + i;
+                    if self.h[k] > top
+                        && crate::geom::dist_point_seg(self.centre(i, j), p, q) <= reach
+                    {
+                        top = self.h[k];
+                    }
+                }
+            }
+        }
+        top
+    }
+}
+
+/// A segment in pieces no longer than [`PIECE`].
+fn pieces(a: DVec2, b: DVec2) -> impl Iterator<Item = (DVec2, DVec2)> {
+    let n = ((a.distance(b) / PIECE).ceil() as usize).max(1);
+    (0..n).map(move |k| {
+        (
+            a.lerp(b, k as f64 / n as f64),
+            a.lerp(b, (k + 1) as f64 / n as f64),
+        )
+    })
+}
+
+/// The tool's parts as vertical cylinders: (radius, height of their lower
+/// end above the tip).
+fn cylinders(t: &Tool) -> Vec<(f64, f64)> {
+    let mut c = vec![(0.5 * t.diameter, 0.0)];
+    if t.stickout > t.flute_length && t.shank_diameter > 0.0 {
+        c.push((0.5 * t.shank_diameter, t.flute_length));
+    }
+    if t.holder_diameter > 0.0 && t.holder_length > 0.0 {
+        c.push((0.5 * t.holder_diameter, t.stickout));
+    }
+    c
+}
+
+/// The lowest tip height (along up) at which the tool, its shank and its
+/// holder clear the stock by `clearance` moving straight from `a` to `b`.
+fn lowest(map: &HeightMap, a: DVec2, b: DVec2, cyl: &[(f64, f64)], clearance: f64) -> f64 {
+    cyl.iter()
+        .map(|&(rho, above)| map.highest(a, b, rho) - above)
+        .fold(f64::NEG_INFINITY, f64::max)
+        + clearance
+}
+
+/// A feature's frame, to map an operation's moves to the local moves stage 7
+/// made them from (and time them the same way).
+struct Local {
+    origin: DVec3,
+    x: DVec3,
+    y: DVec3,
+    z: DVec3,
+}
+
+impl Local {
+    fn new(f: &thinplan_plan::MachiningFeature) -> Self {
+        let fr = &f.shape.frame;
+        let z = fr.z.normalize_or_zero();
+        let x = (fr.x - z * fr.x.dot(z)).normalize_or_zero();
+        Local {
+            origin: fr.origin,
+            x,
+            y: z.cross(x),
+            z,
+        }
+    }
+    fn point(&self, p: DVec3) -> DVec3 {
+        let d = p - self.origin;
+        DVec3::new(d.dot(self.x), d.dot(self.y), d.dot(self.z))
+    }
+    fn part(&self, p: DVec3) -> DVec3 {
+        self.origin + self.x * p.x + self.y * p.y + self.z * p.z
+    }
+    fn lmove(&self, m: &PathMove) -> LMove {
+        LMove {
+            to: self.point(m.to),
+            arc: m.arc.map(|a| {
+                let c = self.point(a.centre).truncate();
+                let ccw = if a.axis.dot(self.z) >= 0.0 {
+                    !a.clockwise
+                } else {
+                    a.clockwise
+                };
+                (c, ccw)
+            }),
+            kind: if m.region == Region3::Rapid {
+                Kind::Rapid
+            } else {
+                Kind::Link
+            },
+        }
+    }
+}
+
+fn is_vertical(a: DVec3, b: DVec3, v: &View) -> bool {
+    v.xy(a).distance(v.xy(b)) < 1e-9
+}
+
+/// Lowers the links of `plan`'s operations in `plan.operation_order` on the
+/// in-process stock; `part_box` is the part's box (part coordinates).
+/// Records what it did in each changed operation's provenance
+/// (`links_lowered`, `link_clearance_mm`) and retimes it.
+pub fn lower_links(
+    plan: &mut Plan,
+    k: &Knowledge,
+    part_box: (DVec3, DVec3),
+) -> Result<LinkReport, OperationsError> {
+    let mut report = LinkReport::default();
+    let mk = &k.methods;
+    if mk.links != LinkHeight::InProcessStock || plan.operation_order.is_empty() {
+        return Ok(report);
+    }
+    let (_, tools, limits) = resources(plan, k)?;
+    let rapid_cap = limits.v_max.iter().copied().fold(0.0, f64::max);
+    let clearance = mk.safe_clearance;
+    let view = View::new(plan.setup.up);
+
+    // The map: the part's box and every feature's box at their tops, with
+    // room for the widest holder around everything the tools visit.
+    let corners = |lo: DVec3, hi: DVec3| {
+        (0..8).map(move |c| {
+            DVec3::new(
+                if c & 1 == 0 { lo.x } else { hi.x },
+                if c & 2 == 0 { lo.y } else { hi.y },
+                if c & 4 == 0 { lo.z } else { hi.z },
+            )
+        })
+    };
+    let mut boxes: Vec<(DVec2, DVec2, f64)> = Vec::new();
+    let mut add_box = |pts: &mut dyn Iterator<Item = DVec3>| {
+        let (mut lo, mut hi, mut top) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
+        for p in pts {
+            lo = lo.min(view.xy(p));
+            hi = hi.max(view.xy(p));
+            top = top.max(view.z(p));
+        }
+        if lo.x <= hi.x && lo.y <= hi.y && top.is_finite() {
+            boxes.push((lo, hi, top));
+        }
+    };
+    add_box(&mut corners(part_box.0, part_box.1));
+    for f in &plan.machining_features {
+        let l = Local::new(f);
+        let s = &f.shape;
+        let pts: Vec<DVec3> = std::iter::once(&s.region.outer)
+            .flat_map(|lp| lp.vertices.iter())
+            .flat_map(|v| [s.z_min, s.z_max].map(|z| l.part(DVec3::new(v.x, v.y, z))))
+            .collect();
+        // Arcs bulge past their vertices by at most half their chord.
+        let grow = crate::geom::loop_edges(&s.region.outer)
+            .iter()
+            .filter(|e| e.bulge.abs() > 1e-12)
+            .map(|e| 0.5 * e.a.distance(e.b) * e.bulge.abs().max(1.0))
+            .fold(0.0, f64::max);
+        let (mut lo, mut hi, mut top) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
+        for p in &pts {
+            lo = lo.min(view.xy(*p));
+            hi = hi.max(view.xy(*p));
+            top = top.max(view.z(*p));
+        }
+        if lo.x <= hi.x && lo.y <= hi.y && top.is_finite() {
+            boxes.push((lo - DVec2::splat(grow), hi + DVec2::splat(grow), top));
+        }
+    }
+    let reach = tools
+        .tools
+        .iter()
+        .flat_map(|t| cylinders(t).into_iter().map(|c| c.0))
+        .fold(0.0, f64::max)
+        + 2.0 * CELL;
+    let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+    for (a, b, _) in &boxes {
+        lo = lo.min(*a);
+        hi = hi.max(*b);
+    }
+    for op in &plan.operations {
+        for p in std::iter::once(op.start).chain(op.moves.iter().map(|m| m.to)) {
+            lo = lo.min(view.xy(p));
+            hi = hi.max(view.xy(p));
+        }
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Ok(report);
+    }
+    let mut map = HeightMap::new(lo - DVec2::splat(reach), hi + DVec2::splat(reach));
+    for (a, b, top) in &boxes {
+        map.raise_box(*a, *b, *top);
+    }
+
+    let index: BTreeMap<OperationId, usize> = plan
+        .operations
+        .iter()
+        .enumerate()
+        .map(|(i, o)| (o.id, i))
+        .collect();
+    let features: BTreeMap<_, usize> = plan
+        .machining_features
+        .iter()
+        .enumerate()
+        .map(|(i, f)| (f.id, i))
+        .collect();
+    let order: Vec<usize> = plan
+        .operation_order
+        .iter()
+        .filter_map(|id| index.get(id).copied())
+        .collect();
+    let mut changed = vec![false; plan.operations.len()];
+    let mut prev: Option<usize> = None;
+    for &oi in &order {
+        let op = &plan.operations[oi];
+        let (op_tool, op_start) = (op.tool.clone(), op.start);
+        let tool = tools.tools.iter().find(|t| t.id == op.tool);
+        let local = features
+            .get(&op.feature)
+            .map(|&fi| Local::new(&plan.machining_features[fi]));
+        let (Some(tool), Some(local)) = (tool, local) else {
+            report.skipped.push(op.id);
+            prev = None;
+            continue;
+        };
+        if op.tool_axis.normalize_or_zero().dot(view.up) < 1.0 - 1e-9
+            || local.z.dot(view.up) < 1.0 - 1e-9
+        {
+            report.skipped.push(op.id);
+            prev = None;
+            continue;
+        }
+        let cyl = cylinders(tool);
+        let mut start = op_start;
+        let mut link_z = None;
+
+        // The link from the previous operation of the same tool: straight
+        // across from the top of its retract to above this start.
+        if let Some(pi) = prev.filter(|&p| plan.operations[p].tool == op_tool) {
+            let p = &plan.operations[pi];
+            let n = p.moves.len();
+            let retract = p.moves.last().filter(|m| m.region == Region3::Rapid);
+            let foot = match n {
+                0 => None,
+                1 => Some(p.start),
+                _ => Some(p.moves[n - 2].to),
+            };
+            if let (Some(r), Some(foot)) = (retract, foot) {
+                if is_vertical(foot, r.to, &view) && view.z(r.to) >= view.z(foot) {
+                    let old = view.z(r.to).min(view.z(op_start));
+                    let l = lowest(&map, view.xy(foot), view.xy(op_start), &cyl, clearance)
+                        .max(view.z(foot))
+                        .min(old);
+                    // Planned even at stage 7's own height: the post's
+                    // link would climb over its clearance height instead.
+                    if l.is_finite() {
+                        let l = if l > old - MIN_GAIN { old } else { l };
+                        if view.z(r.to) > l + 1e-12 {
+                            let end = r.to + view.up * (l - view.z(r.to));
+                            let pm = plan.operations[pi].moves.last_mut().expect("a retract");
+                            pm.to = end;
+                            changed[pi] = true;
+                        }
+                        start = op_start + view.up * (l - view.z(op_start));
+                        link_z = Some(l);
+                        report.between += 1;
+                    }
+                }
+            }
+        }
+        let op = &plan.operations[oi];
+        let (moves, inside) =
+            lower_inside(op, start, tool, &cyl, &mut map, &local, &view, clearance);
+        report.inside += inside;
+        if inside > 0 || link_z.is_some() {
+            let op = &mut plan.operations[oi];
+            op.start = start;
+            op.moves = moves;
+            op.link_z = link_z;
+            op.provenance
+                .values
+                .insert("links_lowered".into(), inside as f64);
+            op.provenance
+                .values
+                .insert("link_clearance_mm".into(), clearance);
+            changed[oi] = true;
+        }
+        prev = Some(oi);
+    }
+    for (oi, c) in changed.iter().enumerate() {
+        if *c {
+            let op = &plan.operations[oi];
+            let fi = features[&op.feature];
+            let local = Local::new(&plan.machining_features[fi]);
+            let lm: Vec<(LMove, f64)> = op
+                .moves
+                .iter()
+                .map(|m| {
+                    let cap = if m.region == Region3::Rapid {
+                        rapid_cap
+                    } else {
+                        m.feed / 60.0
+                    };
+                    (local.lmove(m), cap)
+                })
+                .collect();
+            let (length, time) = length_and_time(
+                local.point(op.start),
+                lm.iter().map(|(m, c)| (m, *c)),
+                &limits,
+            );
+            let op = &mut plan.operations[oi];
+            op.provenance.values.insert("length_mm".into(), length);
+            op.provenance.values.insert("time_s".into(), time);
+        }
+    }
+    Ok(report)
+}
+
+/// One operation's moves from `start` with each rapid up–across–down link
+/// lowered, the descent from `start` included; cuts the map as it goes.
+/// Returns the moves and how many links it lowered.
+#[allow(clippy::too_many_arguments)]
+fn lower_inside(
+    op: &Operation,
+    start: DVec3,
+    tool: &Tool,
+    cyl: &[(f64, f64)],
+    map: &mut HeightMap,
+    local: &Local,
+    view: &View,
+    clearance: f64,
+) -> (Vec<PathMove>, usize) {
+    let mv = &op.moves;
+    let mut out: Vec<PathMove> = Vec::with_capacity(mv.len());
+    let mut pos = start;
+    let mut lowered = 0;
+    let rapid = |m: &PathMove| m.region == Region3::Rapid && m.arc.is_none();
+    // Where a rapid descent at `q` may end: clear of the stock there, not
+    // below the feed descent that follows, never below stage 7's end.
+    let descent = |map: &HeightMap, q: DVec3, old: f64, next: Option<&PathMove>| {
+        let below = next
+            .filter(|n| n.region != Region3::Rapid && is_vertical(q, n.to, view))
+            .map_or(old, |n| view.z(n.to));
+        lowest(map, view.xy(q), view.xy(q), cyl, clearance)
+            .max(below)
+            .min(old)
+    };
+    let mut i = 0;
+    // The first descent, from a lowered start.
+    if (start - op.start).length() > 1e-12 {
+        if let Some(m) = mv
+            .first()
+            .filter(|m| rapid(m) && is_vertical(start, m.to, view))
+        {
+            let d = descent(map, m.to, view.z(m.to), mv.get(1)).min(view.z(start));
+            if d < view.z(start) - 1e-9 {
+                let mut m = m.clone();
+                m.to += view.up * (d - view.z(m.to));
+                pos = m.to;
+                out.push(m);
+            }
+            i = 1;
+        }
+    }
+    while i < mv.len() {
+        if i + 2 < mv.len() && rapid(&mv[i]) && rapid(&mv[i + 1]) && rapid(&mv[i + 2]) {
+            let (up, across, down) = (&mv[i], &mv[i + 1], &mv[i + 2]);
+            let h_old = view.z(up.to);
+            if is_vertical(pos, up.to, view)
+                && h_old >= view.z(pos)
+                && (view.z(across.to) - h_old).abs() < 1e-9
+                && is_vertical(across.to, down.to, view)
+                && view.z(down.to) <= h_old
+            {
+                let h = lowest(map, view.xy(pos), view.xy(across.to), cyl, clearance)
+                    .max(view.z(pos))
+                    .min(h_old);
+                if h < h_old - MIN_GAIN {
+                    let lift = |p: DVec3, z: f64| p + view.up * (z - view.z(p));
+                    if h > view.z(pos) + 1e-9 {
+                        out.push(PathMove {
+                            to: lift(pos, h),
+                            ..up.clone()
+                        });
+                    }
+                    let over = lift(across.to, h);
+                    out.push(PathMove {
+                        to: over,
+                        ..*across
+                    });
+                    let d = descent(map, down.to, view.z(down.to), mv.get(i + 3)).min(h);
+                    let mut end = over;
+                    if d < h - 1e-9 {
+                        end = lift(down.to, d);
+                        out.push(PathMove { to: end, ..*down });
+                    }
+                    pos = end;
+                    lowered += 1;
+                    i += 3;
+                    continue;
+                }
+            }
+        }
+        let m = &mv[i];
+        if m.region != Region3::Rapid {
+            let pts: Vec<DVec3> = if m.arc.is_none() {
+                vec![m.to]
+            } else {
+                move_points(local.point(pos), &local.lmove(m), CHORD)
+                    .into_iter()
+                    .map(|p| local.part(p))
+                    .collect()
+            };
+            let mut a = pos;
+            for b in pts {
+                map.cut(view.xy(a), view.xy(b), view.z(a).max(view.z(b)), tool);
+                a = b;
+            }
+        }
+        pos = m.to;
+        out.push(m.clone());
+        i += 1;
+    }
+    (out, lowered)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use thinplan_knowledge::ToolKind;
+
+    fn tool(d: f64, rc: f64) -> Tool {
+        Tool {
+            id: "t".into(),
+            kind: ToolKind::BullNoseEndMill,
+            diameter: d,
+            corner_radius: rc,
+            flutes: 3,
+            flute_length: 100.0,
+            stickout: 120.0,
+            shank_diameter: d,
+            holder_diameter: 40.0,
+            holder_length: 50.0,
+            max_slot_depth_ratio: 0.5,
+        }
+    }
+
+    /// Height of a bull-nose tool's lower surface above its tip at
+    /// horizontal distance `rho` from its axis; `None` beyond its radius.
+    fn surface(t: &Tool, rho: f64) -> Option<f64> {
+        let (r, rc) = (0.5 * t.diameter, t.corner_radius);
+        if rho > r {
+            None
+        } else if rho <= r - rc {
+            Some(0.0)
+        } else {
+            let u = rho - (r - rc);
+            Some(rc - (rc * rc - u * u).max(0.0).sqrt())
+        }
+    }
+
+    proptest! {
+        /// No cell is ever lower than the true stock anywhere in it: the
+        /// blank's top minus the exact swept bull-nose, sampled at random
+        /// points.
+        #[test]
+        fn the_map_never_lies_below_the_stock(
+            d in 2.0f64..20.0,
+            rc_frac in 0.0f64..0.5,
+            moves in prop::collection::vec((0.0f64..60.0, 0.0f64..60.0, 0.0f64..20.0), 2..8),
+            probes in prop::collection::vec((0.0f64..60.0, 0.0f64..60.0), 50),
+        ) {
+            let t = tool(d, rc_frac * d);
+            let top = 20.0;
+            let mut map = HeightMap::new(DVec2::ZERO, DVec2::splat(60.0));
+            map.raise_box(DVec2::ZERO, DVec2::splat(60.0), top);
+            let segs: Vec<(DVec2, DVec2, f64)> = moves
+                .windows(2)
+                .map(|w| (DVec2::new(w[0].0, w[0].1), DVec2::new(w[1].0, w[1].1), w[1].2))
+                .collect();
+            for (a, b, z) in &segs {
+                map.cut(*a, *b, *z, &t);
+            }
+            for (x, y) in probes {
+                let p = DVec2::new(x, y);
+                let truth = segs
+                    .iter()
+                    .filter_map(|(a, b, z)| {
+                        surface(&t, crate::geom::dist_point_seg(p, *a, *b)).map(|s| z + s)
+                    })
+                    .fold(top, f64::min);
+                let i = ((x / CELL) as usize).min(map.nx - 1);
+                let j = ((y / CELL) as usize).min(map.ny - 1);
+                prop_assert!(map.h[j * map.nx + i] >= truth - 1e-9,
+                    "cell ({i}, {j}) at {} below the stock {truth} at {p}", map.h[j * map.nx + i]);
+            }
+        }
+    }
+
+    /// A link beside a column rises for the part of the tool that passes
+    /// over it: the tool when it crosses the column, the holder when only
+    /// the holder's radius reaches it.
+    #[test]
+    fn a_link_clears_the_stock_under_tool_and_holder() {
+        let t = tool(10.0, 0.0);
+        let cyl = cylinders(&t);
+        let mut map = HeightMap::new(DVec2::ZERO, DVec2::splat(100.0));
+        // A floor at 0 with a column 10 × 10 at (45..55, 45..55) up to 150.
+        map.raise_box(DVec2::ZERO, DVec2::splat(100.0), 0.0);
+        map.raise_box(DVec2::splat(45.0), DVec2::splat(55.0), 150.0);
+        let clear = 5.0;
+        // Far from the column: the floor plus the clearance.
+        let far = lowest(
+            &map,
+            DVec2::new(5.0, 5.0),
+            DVec2::new(95.0, 5.0),
+            &cyl,
+            clear,
+        );
+        assert!((far - 5.0).abs() < 1e-9, "{far}");
+        // Across it: over its top.
+        let over = lowest(
+            &map,
+            DVec2::new(5.0, 50.0),
+            DVec2::new(95.0, 50.0),
+            &cyl,
+            clear,
+        );
+        assert!((over - 155.0).abs() < 1e-9, "{over}");
+        // 15 mm beside it (beyond the tool's 5 and the shank's 5, within the
+        // holder's 20): the holder, 120 above the tip, must clear 150.
+        let beside = lowest(
+            &map,
+            DVec2::new(5.0, 70.0),
+            DVec2::new(95.0, 70.0),
+            &cyl,
+            clear,
+        );
+        assert!((beside - 35.0).abs() < 1e-9, "{beside}");
+        // Beyond the holder's reach of it, the floor again.
+        let clear_of = lowest(
+            &map,
+            DVec2::new(5.0, 80.0),
+            DVec2::new(95.0, 80.0),
+            &cyl,
+            clear,
+        );
+        assert!((clear_of - 5.0).abs() < 1e-9, "{clear_of}");
+    }
+
+    /// Cutting lowers only cells the tool covers whole, and not cells whose
+    /// stock stood above the flutes.
+    #[test]
+    fn a_cut_lowers_the_cells_under_the_tool_only() {
+        let mut t = tool(10.0, 2.0);
+        let mut map = HeightMap::new(DVec2::ZERO, DVec2::splat(40.0));
+        map.raise_box(DVec2::ZERO, DVec2::splat(40.0), 20.0);
+        map.cut(DVec2::new(10.0, 20.0), DVec2::new(30.0, 20.0), 4.0, &t);
+        let h = |map: &HeightMap, x: f64, y: f64| map.h[(y as usize) * map.nx + x as usize];
+        assert_eq!(h(&map, 20.0, 20.0), 4.0, "under the flat bottom");
+        assert_eq!(
+            h(&map, 20.0, 23.5),
+            6.0,
+            "under the corner: tip plus its radius"
+        );
+        assert_eq!(h(&map, 20.0, 26.0), 20.0, "beyond the tool");
+        // Short flutes: a cut 30 below the top does not reach the top.
+        t.flute_length = 10.0;
+        map.cut(DVec2::new(10.0, 5.0), DVec2::new(30.0, 5.0), -15.0, &t);
+        assert_eq!(h(&map, 20.0, 5.0), 20.0);
+    }
+}
