@@ -479,7 +479,7 @@ const MISSED_ALLOWANCE: &[(&str, f64, &str)] = &[
     ("crossing_ribs", 0.1, "nothing left (measured 0.0; 23.8 while the floor rest pass was refused along a whole wall for its last millimetres, 656.8 while the simulation's reach spilled past the tools' limits)"),
     ("flange_cutouts", 8.0, "the cut-outs' round bottoms: slabs narrower than any tool, cut from the open side slab by slab (measured 6.2; 16.0 measured down to the part rather than to what a tool reaches, 30.4 with the spilling reach, 157 before the wall rest pass)"),
     ("flange_web_slot", 0.1, "nothing left (measured 0.0; 0.06 with the spilling reach)"),
-    ("isogrid", 9.0, "one 35-cell column beside a pocket's rib end (measured 7.2; 45.4 measured down to the part rather than to what a tool reaches — columns no tool reaches whose tops a tool could shave by 0.1 mm — 64.7 before the floor rest pass ran along partial walls, 967.5 with the spilling reach)"),
+    ("isogrid", 0.6, "specks of one to three cells at rib ends (measured 0.45; 7.2 before the wall rest pass with the feature's own tool after every feature took a 35-cell column beside a pocket's rib end, 45.4 measured down to the part rather than to what a tool reaches — columns no tool reaches whose tops a tool could shave by 0.1 mm — 64.7 before the floor rest pass ran along partial walls, 967.5 with the spilling reach)"),
     ("pentagon_pocket", 0.1, "nothing left (measured 0.0; 0.27 with the spilling reach)"),
     ("tall_rib", 0.0, "nothing left (measured 0.0)"),
     ("wall_holes", 0.1, "nothing left (measured 0.0)"),
@@ -555,8 +555,18 @@ fn assert_machined(names: &[&str]) {
         let p: Value = serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
         let mut reported = 0.0;
         for r in p["refusals"].as_array().unwrap() {
+            let rule = r["rule"].as_str().unwrap();
+            // A wall rest pass with the feature's own tool that other
+            // operations made redundant: nothing left, nothing reported.
+            if r["stage"] == "operations" && rule.ends_with(".wall_rest") {
+                assert!(
+                    r["reason"].as_str().unwrap().contains("already cut"),
+                    "{name}: {r}"
+                );
+                continue;
+            }
             if r["stage"] == "operations" {
-                assert_eq!(r["rule"], "operations.unreachable", "{name}: {r}");
+                assert_eq!(rule, "operations.unreachable", "{name}: {r}");
                 assert!(
                     r["reason"].as_str().unwrap().contains("unreachable"),
                     "{name}: {r}"

@@ -1968,7 +1968,11 @@ enum Rest<'k> {
 /// the largest tool smaller than the feature's, only along stretches where
 /// the feature's tool left more than `min_left` on the wall (its disc never
 /// came that close: corners and fillets at the wall's ends narrower than
-/// it).
+/// it). With no smaller tool in the set and `run_last`, the feature's own
+/// tool, every edge that is not product taken as open (all other features
+/// are gone by then): a neighbour that stood during the feature's passes
+/// no longer limits the reach. Stage 7 drops such a pass where other
+/// operations already cut all of it (`drop_covered_rest`).
 ///
 /// Links stay in the space the feature's tool cleared. `None`: no tool
 /// gains, or nothing is left.
@@ -1999,9 +2003,29 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             .total_cmp(&a.diameter)
             .then_with(|| a.id.cmp(&b.id)),
     });
-    let Some((small, g2)) = cands
+    // No smaller tool: a wall rest pass run last may use the feature's own
+    // tool, now that every other feature is gone: every edge that is not
+    // product is open, and the removed space is the whole free space.
+    let Some((small, g2, own)) = cands
         .iter()
-        .find_map(|t| geometry(c.f, c.m, t, c.free, c.removed).map(|g| (*t, g)))
+        .find_map(|t| geometry(c.f, c.m, t, c.free, c.removed).map(|g| (*t, g, false)))
+        .or_else(|| match rest {
+            Rest::Wall(w) if w.run_last && cands.is_empty() => {
+                let mut f = c.f.clone();
+                let open = |a: &mut Adjacency| {
+                    if *a == Adjacency::Feature {
+                        *a = Adjacency::Open;
+                    }
+                };
+                f.side_adjacency.iter_mut().for_each(open);
+                f.hole_adjacency
+                    .iter_mut()
+                    .flat_map(|h| h.iter_mut())
+                    .for_each(open);
+                geometry(&f, c.m, main, c.free, c.free).map(|g| (main, g, true))
+            }
+            _ => None,
+        })
     else {
         return Ok(None);
     };
@@ -2147,6 +2171,9 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
         }
         Rest::Wall(w) => {
             v.insert("min_left_mm".into(), w.min_left);
+            if own {
+                v.insert("after_every_feature".into(), 1.0);
+            }
             if w.run_last {
                 v.insert(crate::RUN_LAST.into(), 1.0);
             }

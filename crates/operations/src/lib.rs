@@ -366,7 +366,131 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
             }
         }
     }
+    let dropped = drop_covered_rest(&mut out.operations, plan.setup.up, tools);
+    out.refusals.extend(dropped);
     Ok(out)
+}
+
+/// Wall rest passes with the feature's own tool after every feature
+/// (`after_every_feature`) are planned per feature, without knowing what
+/// the other features' operations cut. One whose every boundary point
+/// another operation already cut (a move at or below its level whose disc
+/// holds its disc within `min_left`) would only re-machine the product:
+/// it is dropped, with a refusal naming its feature and rule. Ids are
+/// renumbered in order.
+fn drop_covered_rest(
+    ops: &mut Vec<Operation>,
+    up: DVec3,
+    tools: &thinplan_knowledge::ToolSet,
+) -> Vec<Refusal> {
+    let own = |o: &Operation| o.provenance.values.get("after_every_feature") == Some(&1.0);
+    if !ops.iter().any(own) {
+        return Vec::new();
+    }
+    let view = links::View::new(up);
+    let radius = |o: &Operation| {
+        tools
+            .tools
+            .iter()
+            .find(|t| t.id == o.tool)
+            .map_or(0.0, |t| 0.5 * t.diameter)
+    };
+    // Every other operation's cutting segments in plan view, bucketed.
+    const BUCKET: f64 = 5.0;
+    let key = |p: DVec2| ((p.x / BUCKET).floor() as i64, (p.y / BUCKET).floor() as i64);
+    let mut segs: Vec<(DVec2, DVec2, f64, f64)> = Vec::new();
+    let mut grid: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
+    for o in ops.iter().filter(|o| !own(o)) {
+        let mut from = o.start;
+        for m in &o.moves {
+            if m.region != Region3::Rapid {
+                // An arc as its chord, its disc smaller by the sagitta
+                // (at most half the chord): never "covered" wrongly.
+                let (a, b) = (view.xy(from), view.xy(m.to));
+                let r = radius(o)
+                    - if m.arc.is_some() {
+                        0.5 * a.distance(b)
+                    } else {
+                        0.0
+                    };
+                let z = view.z(from).max(view.z(m.to));
+                let (lo, hi) = (
+                    key(a.min(b) - DVec2::splat(r)),
+                    key(a.max(b) + DVec2::splat(r)),
+                );
+                for i in lo.0..=hi.0 {
+                    for j in lo.1..=hi.1 {
+                        grid.entry((i, j)).or_default().push(segs.len());
+                    }
+                }
+                segs.push((a, b, z, r));
+            }
+            from = m.to;
+        }
+    }
+    let mut drop = Vec::new();
+    for (idx, o) in ops.iter().enumerate().filter(|(_, o)| own(o)) {
+        let r = radius(o);
+        let ml = o
+            .provenance
+            .values
+            .get("min_left_mm")
+            .copied()
+            .unwrap_or(0.0);
+        let mut from = o.start;
+        let mut covered = true;
+        'moves: for m in &o.moves {
+            if m.region == Region3::Boundary {
+                let (a, b) = (view.xy(from), view.xy(m.to));
+                let z = view.z(from).min(view.z(m.to));
+                let n = ((a.distance(b) / 0.5).ceil() as usize).max(1);
+                for s in 0..=n {
+                    let c = a.lerp(b, s as f64 / n as f64);
+                    let hit = grid.get(&key(c)).is_some_and(|list| {
+                        list.iter().any(|&q| {
+                            let (p0, p1, zq, rq) = segs[q];
+                            zq <= z + 1e-6 && geom::dist_point_seg(c, p0, p1) <= rq - r + ml
+                        })
+                    });
+                    if !hit {
+                        covered = false;
+                        break 'moves;
+                    }
+                }
+            }
+            from = m.to;
+        }
+        if covered {
+            drop.push(idx);
+        }
+    }
+    let mut refusals = Vec::new();
+    for &idx in drop.iter().rev() {
+        let o = ops.remove(idx);
+        let mut provenance =
+            Provenance::new(ProvenanceSource::Knowledge, o.provenance.rule.clone());
+        provenance
+            .values
+            .insert("feature".into(), f64::from(o.feature.0));
+        if let Some(ml) = o.provenance.values.get("min_left_mm") {
+            provenance.values.insert("min_left_mm".into(), *ml);
+        }
+        refusals.push(Refusal {
+            stage: Stage::Operations,
+            rule: o.provenance.rule.clone(),
+            reason: format!(
+                "{}: no wall rest pass with its own tool after every feature: other operations \
+                 already cut every stretch of it",
+                o.feature
+            ),
+            provenance,
+        });
+    }
+    refusals.reverse();
+    for (i, o) in ops.iter_mut().enumerate() {
+        o.id = OperationId(i as u32);
+    }
+    refusals
 }
 
 /// A whole feature's volume (mm³): its region over its depth.
@@ -514,4 +638,83 @@ fn to_operation(
 /// Per-operation numbers by id (for reports and benchmarks).
 pub fn summaries(plan: &Plan) -> BTreeMap<OperationId, OperationSummary> {
     plan.operations.iter().map(|o| (o.id, summary(o))).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use thinplan_plan::MachiningFeatureId;
+
+    fn op(feature: u32, own: bool, z: f64, a: (f64, f64), b: (f64, f64)) -> Operation {
+        let mut provenance = Provenance::new(ProvenanceSource::Knowledge, "methods.t.wall_rest");
+        if own {
+            provenance.values.insert("after_every_feature".into(), 1.0);
+            provenance.values.insert("min_left_mm".into(), 0.1);
+        }
+        let mv = |x: f64, y: f64, z: f64, region| PathMove {
+            to: DVec3::new(x, y, z),
+            arc: None,
+            feed: if region == Region3::Rapid {
+                0.0
+            } else {
+                1000.0
+            },
+            region,
+        };
+        Operation {
+            id: OperationId(99),
+            feature: MachiningFeatureId(feature),
+            method: "t".into(),
+            tool: "em12".into(),
+            tool_axis: DVec3::Z,
+            spindle_rpm: 10000.0,
+            start: DVec3::new(a.0, a.1, 20.0),
+            moves: vec![
+                mv(a.0, a.1, z, Region3::Link),
+                mv(
+                    b.0,
+                    b.1,
+                    z,
+                    if own {
+                        Region3::Boundary
+                    } else {
+                        Region3::Rest
+                    },
+                ),
+                mv(b.0, b.1, 20.0, Region3::Rapid),
+            ],
+            provenance,
+            link_z: None,
+        }
+    }
+
+    /// A wall rest pass with the feature's own tool is dropped exactly when
+    /// another operation's disc, at or below its level, held its disc
+    /// everywhere along it (within `min_left`).
+    #[test]
+    fn an_own_tool_rest_pass_others_already_cut_is_dropped() {
+        let k = Knowledge::builtin().unwrap();
+        let tools = k.tool_set("endmills_12_20").unwrap();
+        let mut ops = vec![
+            op(1, false, 0.0, (0.0, 0.0), (50.0, 0.0)),
+            op(2, true, 0.0, (10.0, 0.0), (40.0, 0.0)),
+            op(3, true, 0.0, (10.0, 1.0), (40.0, 1.0)),
+            op(4, true, -1.0, (10.0, 0.0), (40.0, 0.0)),
+            op(5, true, 0.0, (10.0, 0.05), (60.0, 0.05)),
+        ];
+        let refused = drop_covered_rest(&mut ops, DVec3::Z, tools);
+        let features: Vec<u32> = ops.iter().map(|o| o.feature.0).collect();
+        // 2: on the same line at the same level; 3: 1 mm aside (> min_left);
+        // 4: deeper; 5: runs 10 mm past the other's end.
+        assert_eq!(features, [1, 3, 4, 5]);
+        assert_eq!(refused.len(), 1);
+        assert!(
+            refused[0].reason.starts_with("MF2:"),
+            "{}",
+            refused[0].reason
+        );
+        assert_eq!(refused[0].rule, "methods.t.wall_rest");
+        let ids: Vec<u32> = ops.iter().map(|o| o.id.0).collect();
+        assert_eq!(ids, [0, 1, 2, 3]);
+    }
 }

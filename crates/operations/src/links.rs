@@ -55,14 +55,14 @@ pub struct LinkReport {
 }
 
 /// Plan view along the set-up's up: x, y across it, z along it.
-struct View {
+pub(crate) struct View {
     ex: DVec3,
     ey: DVec3,
     up: DVec3,
 }
 
 impl View {
-    fn new(up: DVec3) -> Self {
+    pub(crate) fn new(up: DVec3) -> Self {
         let up = up.normalize_or_zero();
         let seed = if up.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
         let ex = (seed - up * seed.dot(up)).normalize_or_zero();
@@ -72,10 +72,10 @@ impl View {
             up,
         }
     }
-    fn xy(&self, p: DVec3) -> DVec2 {
+    pub(crate) fn xy(&self, p: DVec3) -> DVec2 {
         DVec2::new(p.dot(self.ex), p.dot(self.ey))
     }
-    fn z(&self, p: DVec3) -> f64 {
+    pub(crate) fn z(&self, p: DVec3) -> f64 {
         p.dot(self.up)
     }
 }
