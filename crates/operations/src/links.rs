@@ -32,6 +32,8 @@ use crate::{length_and_time, resources, Kind, OperationsError};
 /// Side of a height-map cell, mm. Any size is safe (cells err towards
 /// material); finer cells let links run lower beside walls.
 const CELL: f64 = 1.0;
+/// Most cells of a map: a larger part gets larger cells (4 M cells: 32 MB).
+const MAX_CELLS: f64 = 4.0e6;
 /// Arcs are followed by chords at most this long, mm; a chord strays at most
 /// half of it from its arc, which the cut radius gives up.
 const CHORD: f64 = 0.5;
@@ -83,6 +85,8 @@ impl View {
 /// Highest point of the stock in each cell, along up; outside the map: air.
 struct HeightMap {
     lo: DVec2,
+    /// Side of a cell, mm: [`CELL`], or more on parts over [`MAX_CELLS`].
+    cell: f64,
     nx: usize,
     ny: usize,
     h: Vec<f64>,
@@ -90,10 +94,13 @@ struct HeightMap {
 
 impl HeightMap {
     fn new(lo: DVec2, hi: DVec2) -> Self {
-        let nx = (((hi.x - lo.x) / CELL).ceil().max(1.0)) as usize;
-        let ny = (((hi.y - lo.y) / CELL).ceil().max(1.0)) as usize;
+        let size = (hi - lo).max(DVec2::ZERO);
+        let cell = CELL.max((size.x * size.y / MAX_CELLS).sqrt());
+        let nx = ((size.x / cell).ceil().max(1.0)) as usize;
+        let ny = ((size.y / cell).ceil().max(1.0)) as usize;
         HeightMap {
             lo,
+            cell,
             nx,
             ny,
             h: vec![f64::NEG_INFINITY; nx * ny],
@@ -101,13 +108,13 @@ impl HeightMap {
     }
 
     fn centre(&self, i: usize, j: usize) -> DVec2 {
-        self.lo + DVec2::new((i as f64 + 0.5) * CELL, (j as f64 + 0.5) * CELL)
+        self.lo + DVec2::new((i as f64 + 0.5) * self.cell, (j as f64 + 0.5) * self.cell)
     }
 
     /// Cells whose centre may lie within `reach` of segment a–b.
     fn cells(&self, a: DVec2, b: DVec2, reach: f64) -> (usize, usize, usize, usize) {
-        let lo = (a.min(b) - DVec2::splat(reach) - self.lo) / CELL;
-        let hi = (a.max(b) + DVec2::splat(reach) - self.lo) / CELL;
+        let lo = (a.min(b) - DVec2::splat(reach) - self.lo) / self.cell;
+        let hi = (a.max(b) + DVec2::splat(reach) - self.lo) / self.cell;
         let clamp = |v: f64, n: usize| (v.floor().max(0.0) as usize).min(n);
         (
             clamp(lo.x, self.nx),
@@ -119,7 +126,7 @@ impl HeightMap {
 
     /// Stock up to `top` over the box `lo`–`hi` (plan view).
     fn raise_box(&mut self, lo: DVec2, hi: DVec2, top: f64) {
-        let half = 0.5 * CELL;
+        let half = 0.5 * self.cell;
         let (i0, i1, j0, j1) = self.cells(lo, hi, half);
         for j in j0..j1 {
             for i in i0..i1 {
@@ -143,7 +150,7 @@ impl HeightMap {
     fn cut(&mut self, a: DVec2, b: DVec2, z: f64, tool: &Tool) {
         let r = 0.5 * tool.diameter;
         let rc = tool.corner_radius.clamp(0.0, r);
-        let slack = CELL * std::f64::consts::FRAC_1_SQRT_2 + 0.5 * CHORD;
+        let slack = self.cell * std::f64::consts::FRAC_1_SQRT_2 + 0.5 * CHORD;
         let r_all = r - slack;
         if r_all <= 0.0 {
             return;
@@ -173,7 +180,7 @@ impl HeightMap {
     /// Highest stock in any cell that a disc of radius `rho` swept from `a`
     /// to `b` may touch.
     fn highest(&self, a: DVec2, b: DVec2, rho: f64) -> f64 {
-        let reach = rho + CELL * std::f64::consts::FRAC_1_SQRT_2;
+        let reach = rho + self.cell * std::f64::consts::FRAC_1_SQRT_2;
         let mut top = f64::NEG_INFINITY;
         for (p, q) in pieces(a, b) {
             let (i0, i1, j0, j1) = self.cells(p, q, reach);
@@ -725,6 +732,26 @@ mod tests {
             clear,
         );
         assert!((clear_of - 5.0).abs() < 1e-9, "{clear_of}");
+    }
+
+    /// A part kilometres long gets coarser cells, never more than
+    /// [`MAX_CELLS`], and the map still holds the stock under a cut.
+    #[test]
+    fn a_huge_part_gets_coarser_cells_not_more_of_them() {
+        let mut map = HeightMap::new(DVec2::ZERO, DVec2::new(10_000.0, 2_000.0));
+        assert!(map.cell > CELL && (map.nx * map.ny) as f64 <= MAX_CELLS * 1.01);
+        map.raise_box(DVec2::ZERO, DVec2::new(10_000.0, 2_000.0), 20.0);
+        let t = tool(20.0, 1.0);
+        map.cut(DVec2::new(100.0, 100.0), DVec2::new(200.0, 100.0), 5.0, &t);
+        // Right under the tool's path: down to the tip; 12 mm aside: untouched.
+        assert_eq!(
+            map.highest(DVec2::new(150.0, 100.0), DVec2::new(150.0, 100.0), 0.0),
+            5.0
+        );
+        assert_eq!(
+            map.highest(DVec2::new(150.0, 112.0), DVec2::new(150.0, 112.0), 0.0),
+            20.0
+        );
     }
 
     /// Cutting lowers only cells the tool covers whole, and not cells whose
