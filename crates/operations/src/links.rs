@@ -429,7 +429,15 @@ pub fn lower_links(
                 1 => Some(p.start),
                 _ => Some(p.moves[n - 2].to),
             };
-            if let (Some(r), Some(foot)) = (retract, foot) {
+            // This operation must begin by going straight down from its
+            // start (stage 7's always do): nothing else was checked there.
+            let descends = op.moves.first().is_some_and(|m| {
+                m.region == Region3::Rapid
+                    && m.arc.is_none()
+                    && is_vertical(op_start, m.to, &view)
+                    && view.z(m.to) <= view.z(op_start)
+            });
+            if let (Some(r), Some(foot), true) = (retract, foot, descends) {
                 if is_vertical(foot, r.to, &view) && view.z(r.to) >= view.z(foot) {
                     let old = view.z(r.to).min(view.z(op_start));
                     let l = lowest(&map, view.xy(foot), view.xy(op_start), &cyl, clearance)
