@@ -539,18 +539,24 @@ fn lower_inside(
             .min(old)
     };
     let mut i = 0;
-    // The first descent, from a lowered start.
-    if (start - op.start).length() > 1e-12 {
-        if let Some(m) = mv
-            .first()
-            .filter(|m| rapid(m) && is_vertical(start, m.to, view))
-        {
-            let d = descent(map, m.to, view.z(m.to), mv.get(1)).min(view.z(start));
+    // The first descent: from a lowered start, and in any case rapid down
+    // to the clearance above the stock there (not only to the stock's top),
+    // feeding the rest.
+    if let Some(m) = mv
+        .first()
+        .filter(|m| rapid(m) && is_vertical(start, m.to, view) && view.z(m.to) <= view.z(op.start))
+    {
+        let d = descent(map, m.to, view.z(m.to), mv.get(1)).min(view.z(start));
+        let moved = (start - op.start).length() > 1e-12;
+        if moved || d < view.z(m.to) - MIN_GAIN {
             if d < view.z(start) - 1e-9 {
                 let mut m = m.clone();
                 m.to += view.up * (d - view.z(m.to));
                 pos = m.to;
                 out.push(m);
+            }
+            if d < view.z(m.to) - MIN_GAIN {
+                lowered += 1;
             }
             i = 1;
         }
