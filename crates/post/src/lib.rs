@@ -374,6 +374,14 @@ fn check_operation(op: &Operation, post: &PostProcessor, tools: &ToolSet) -> Res
             reason: "the operation's start point is not finite".into(),
         });
     }
+    if op.link_z.is_some_and(|z| !z.is_finite()) {
+        return Err(PostError::Move {
+            operation: op.id,
+            index: 0,
+            reason: "the height of its link from the previous operation (link_z) is not finite"
+                .into(),
+        });
+    }
     for (index, m) in op.moves.iter().enumerate() {
         let bad = |reason: &str| PostError::Move {
             operation: op.id,

@@ -362,6 +362,11 @@ fn bad_plans_are_refused_naming_the_operation() {
     let e = post(&plan, lc, tools).unwrap_err().to_string();
     assert!(e.contains("OP1, move 0"), "{e}");
 
+    let mut plan = rich_plan();
+    plan.operations[1].link_z = Some(f64::INFINITY);
+    let e = post(&plan, lc, tools).unwrap_err().to_string();
+    assert!(e.contains("OP2") && e.contains("link_z"), "{e}");
+
     let e = post(&empty_plan(), lc, tools).unwrap_err();
     assert_eq!(e, PostError::NoOperations);
 
