@@ -494,6 +494,47 @@ const MISSED_ALLOWANCE: &[(&str, f64, &str)] = &[
 /// isogrid 0.42.
 const AIR_SHARE_MAX: f64 = 0.40;
 
+/// `plan builtin:NAME` to G-code in `d` (files `TAG.*`, `extra` arguments
+/// after the command's), replayed by the stock simulation: asserts the plan
+/// succeeded, no gouge and no rapid into stock; returns the plan's stdout,
+/// the plan file and the simulation's JSON.
+fn plan_and_simulate(name: &str, d: &Path, tag: &str, extra: &[&str]) -> (Vec<u8>, PathBuf, Value) {
+    let (ngc, tbl, plan) = (
+        d.join(format!("{tag}.ngc")),
+        d.join(format!("{tag}.tbl")),
+        d.join(format!("{tag}.plan.json")),
+    );
+    let status = thinplan()
+        .args(["plan", &format!("builtin:{name}"), "--out"])
+        .arg(&plan)
+        .arg("--gcode")
+        .arg(&ngc)
+        .arg("--tool-table")
+        .arg(&tbl)
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(status.status.success(), "{name}: {status:?}");
+    let out = thinplan()
+        .args(["simulate", &format!("builtin:{name}")])
+        .arg(&ngc)
+        .arg("--tool-table")
+        .arg(&tbl)
+        .arg("--json")
+        .output()
+        .unwrap();
+    let v: Value = serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{name}: {e}: {}", String::from_utf8_lossy(&out.stderr)));
+    assert_eq!(v["gouges"]["cells"], 0, "{name} {tag}: {}", v["gouges"]);
+    assert_eq!(
+        v["crashes"].as_array().unwrap().len(),
+        0,
+        "{name} {tag}: {}",
+        v["crashes"]
+    );
+    (status.stdout, plan, v)
+}
+
 /// The whole pipeline to G-code, replayed by the independent stock
 /// simulation: no gouge, no rapid into stock, missed material within the
 /// sample's allowance, and every feature stage 7 gives no operation is
@@ -501,34 +542,7 @@ const AIR_SHARE_MAX: f64 = 0.40;
 fn assert_machined(names: &[&str]) {
     for &name in names {
         let d = tmp(&format!("gcode-{name}"));
-        let (ngc, tbl, plan) = (d.join("p.ngc"), d.join("p.tbl"), d.join("p.json"));
-        let status = thinplan()
-            .args(["plan", &format!("builtin:{name}"), "--out"])
-            .arg(&plan)
-            .arg("--gcode")
-            .arg(&ngc)
-            .arg("--tool-table")
-            .arg(&tbl)
-            .output()
-            .unwrap();
-        assert!(status.status.success(), "{name}: {status:?}");
-        let out = thinplan()
-            .args(["simulate", &format!("builtin:{name}")])
-            .arg(&ngc)
-            .arg("--tool-table")
-            .arg(&tbl)
-            .arg("--json")
-            .output()
-            .unwrap();
-        let v: Value = serde_json::from_slice(&out.stdout)
-            .unwrap_or_else(|e| panic!("{name}: {e}: {}", String::from_utf8_lossy(&out.stderr)));
-        assert_eq!(v["gouges"]["cells"], 0, "{name}: {}", v["gouges"]);
-        assert_eq!(
-            v["crashes"].as_array().unwrap().len(),
-            0,
-            "{name}: {}",
-            v["crashes"]
-        );
+        let (_, plan, v) = plan_and_simulate(name, &d, "p", &[]);
         assert!(v["removed_volume_mm3"].as_f64().unwrap() > 0.0);
         let missed = v["leftover_missed"]["volume_mm3"].as_f64().unwrap();
         let (allowed, why) = MISSED_ALLOWANCE
@@ -927,45 +941,18 @@ fn links_on_the_in_process_stock_run_lower_and_never_into_stock() {
     let name = "chamfered_rib";
     let mut sims = Vec::new();
     let mut plans = Vec::new();
-    for (tag, knowledge) in [("stock", None), ("top", Some(&k))] {
-        let (ngc, tbl, plan) = (
-            d.join(format!("{tag}.ngc")),
-            d.join(format!("{tag}.tbl")),
-            d.join(format!("{tag}.plan.json")),
-        );
-        let mut cmd = thinplan();
-        cmd.args(["plan", &format!("builtin:{name}"), "--json", "--out"])
-            .arg(&plan)
-            .arg("--gcode")
-            .arg(&ngc)
-            .arg("--tool-table")
-            .arg(&tbl);
-        if let Some(k) = knowledge {
-            cmd.arg("--knowledge").arg(k);
-        }
-        let (code, v) = run_json(&mut cmd);
-        assert_eq!(code, 0, "{tag}: {v}");
+    let k = k.to_str().unwrap();
+    for (tag, extra) in [
+        ("stock", vec!["--json"]),
+        ("top", vec!["--json", "--knowledge", k]),
+    ] {
+        let (stdout, plan, s) = plan_and_simulate(name, &d, tag, &extra);
+        let v: Value = serde_json::from_slice(&stdout).unwrap();
         assert_eq!(
             v["collisions"].as_array().unwrap().len(),
             0,
             "{tag}: {}",
             v["collisions"]
-        );
-        let out = thinplan()
-            .args(["simulate", &format!("builtin:{name}")])
-            .arg(&ngc)
-            .arg("--tool-table")
-            .arg(&tbl)
-            .arg("--json")
-            .output()
-            .unwrap();
-        let s: Value = serde_json::from_slice(&out.stdout).unwrap();
-        assert_eq!(s["gouges"]["cells"], 0, "{tag}: {}", s["gouges"]);
-        assert_eq!(
-            s["crashes"].as_array().unwrap().len(),
-            0,
-            "{tag}: {}",
-            s["crashes"]
         );
         sims.push(s);
         plans.push(thinplan_plan::load(&plan).unwrap());

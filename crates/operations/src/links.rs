@@ -315,41 +315,35 @@ pub fn lower_links(
             )
         })
     };
-    let mut boxes: Vec<(DVec2, DVec2, f64)> = Vec::new();
-    let mut add_box = |pts: &mut dyn Iterator<Item = DVec3>| {
+    // Plan-view box and top of points, grown by `grow` across.
+    let plan_box = |pts: &mut dyn Iterator<Item = DVec3>, grow: f64| {
         let (mut lo, mut hi, mut top) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
         for p in pts {
             lo = lo.min(view.xy(p));
             hi = hi.max(view.xy(p));
             top = top.max(view.z(p));
         }
-        if lo.x <= hi.x && lo.y <= hi.y && top.is_finite() {
-            boxes.push((lo, hi, top));
-        }
+        (lo.x <= hi.x && lo.y <= hi.y && top.is_finite())
+            .then(|| (lo - DVec2::splat(grow), hi + DVec2::splat(grow), top))
     };
-    add_box(&mut corners(part_box.0, part_box.1));
+    let mut boxes: Vec<(DVec2, DVec2, f64)> = Vec::new();
+    boxes.extend(plan_box(&mut corners(part_box.0, part_box.1), 0.0));
     for f in &plan.machining_features {
         let l = Local::new(f);
         let s = &f.shape;
-        let pts: Vec<DVec3> = std::iter::once(&s.region.outer)
-            .flat_map(|lp| lp.vertices.iter())
-            .flat_map(|v| [s.z_min, s.z_max].map(|z| l.part(DVec3::new(v.x, v.y, z))))
-            .collect();
+        let mut pts = s
+            .region
+            .outer
+            .vertices
+            .iter()
+            .flat_map(|v| [s.z_min, s.z_max].map(|z| l.part(DVec3::new(v.x, v.y, z))));
         // Arcs bulge past their vertices by at most half their chord.
         let grow = crate::geom::loop_edges(&s.region.outer)
             .iter()
             .filter(|e| e.bulge.abs() > 1e-12)
             .map(|e| 0.5 * e.a.distance(e.b) * e.bulge.abs().max(1.0))
             .fold(0.0, f64::max);
-        let (mut lo, mut hi, mut top) = (DVec2::INFINITY, DVec2::NEG_INFINITY, f64::NEG_INFINITY);
-        for p in &pts {
-            lo = lo.min(view.xy(*p));
-            hi = hi.max(view.xy(*p));
-            top = top.max(view.z(*p));
-        }
-        if lo.x <= hi.x && lo.y <= hi.y && top.is_finite() {
-            boxes.push((lo - DVec2::splat(grow), hi + DVec2::splat(grow), top));
-        }
+        boxes.extend(plan_box(&mut pts, grow));
     }
     let reach = tools
         .tools
