@@ -674,6 +674,7 @@ fn wall_steps(
                 side_adjacency,
                 hole_adjacency: Vec::new(),
                 bottom_adjacency: Adjacency::Product,
+                slopes: None,
                 provenance: prov,
             });
             for (p, mut cp) in pending.drain(..) {
@@ -745,6 +746,7 @@ fn insert_due(
             side_adjacency,
             hole_adjacency: Vec::new(),
             bottom_adjacency: Adjacency::Open,
+            slopes: None,
             provenance: prov,
         });
         cp.note = format!(

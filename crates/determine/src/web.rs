@@ -137,6 +137,7 @@ pub(crate) fn face_mill(
             } else {
                 Adjacency::Feature
             },
+            slopes: None,
             provenance: prov,
         });
         let mut p = Provenance::new(ProvenanceSource::Knowledge, rule.clone())

@@ -783,6 +783,7 @@ pub fn add_drawn(
         side_adjacency: vec![Adjacency::Product; n],
         hole_adjacency: Vec::new(),
         bottom_adjacency: Adjacency::Product,
+        slopes: None,
         provenance: prov,
     });
     Ok(id)
@@ -888,6 +889,7 @@ mod tests {
                 .collect(),
             hole_adjacency,
             bottom_adjacency: Adjacency::Product,
+            slopes: None,
             provenance: Provenance::new(ProvenanceSource::Recogniser, "test"),
         }
     }

@@ -23,6 +23,10 @@ pub struct InterferenceKnowledge {
     /// Largest slab thickness (mm) where the part has faces that are neither
     /// vertical nor horizontal (its section changes within a slab there).
     pub sloped_slab_thickness: f64,
+    /// Thinner slabs where sloped faces are shallow (absent: every sloped
+    /// slab is `sloped_slab_thickness`).
+    #[serde(default)]
+    pub shallow_slabs: Option<ShallowSlabs>,
     /// Pieces smaller than this (mm² in plan view) are dropped as slivers
     /// (their volume is reported).
     pub sliver_area: f64,
@@ -34,6 +38,17 @@ pub struct InterferenceKnowledge {
     /// tool's flute length above the other's bottom (the shank would rub
     /// it).
     pub shank_access: bool,
+}
+
+/// Slab thickness by the slope of the faces a slab crosses: a slab ends
+/// where a tool's contacts on the face would lie `along_face` apart, so at
+/// most `along_face · sin α` thick on a face at α from horizontal, and
+/// never thinner than `min_thickness`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShallowSlabs {
+    pub along_face: f64,
+    pub min_thickness: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -90,6 +105,24 @@ impl InterferenceKnowledge {
                 "`sloped_slab_thickness` must be a positive number, not {}",
                 self.sloped_slab_thickness
             ));
+        }
+        if let Some(sh) = &self.shallow_slabs {
+            if !(sh.along_face.is_finite() && sh.along_face > 0.0) {
+                out.push(format!(
+                    "`shallow_slabs.along_face` must be a positive number, not {}",
+                    sh.along_face
+                ));
+            }
+            if !(sh.min_thickness.is_finite()
+                && sh.min_thickness > 0.0
+                && sh.min_thickness <= self.sloped_slab_thickness)
+            {
+                out.push(format!(
+                    "`shallow_slabs.min_thickness` must be positive and at most \
+                     `sloped_slab_thickness` ({}), not {}",
+                    self.sloped_slab_thickness, sh.min_thickness
+                ));
+            }
         }
         if !(self.sliver_area.is_finite() && self.sliver_area >= 0.0) {
             out.push(format!(

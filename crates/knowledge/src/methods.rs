@@ -42,6 +42,9 @@ pub struct MethodKnowledge {
     pub run_off_radius: f64,
     /// How high links that leave cleared space run (stage 8).
     pub links: LinkHeight,
+    /// How passes meet product faces that slope (absent: `Follow`).
+    #[serde(default)]
+    pub sloped_faces: SlopedFaces,
     /// The methods, tried in order: the first whose `applies` matches a
     /// feature is used.
     pub methods: Vec<Method>,
@@ -56,6 +59,20 @@ pub enum LinkHeight {
     /// above the highest stock under the tool, its shank and its holder
     /// along the link, as the operations before it leave it.
     InProcessStock,
+}
+
+/// How passes meet a product face that slopes within a slab (a chamfer, a
+/// cut-out's round bottom; issue 5).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SlopedFaces {
+    /// The tool's profile (its corner radius) touches the face: the product
+    /// edge moves to where it does, for the tool and the slab's bottom
+    /// (stage 6 samples the face, `MachiningFeature::slopes`).
+    #[default]
+    Follow,
+    /// The face is taken as vertical at the slab's middle section: the
+    /// corner radius stands off it and material stays on it.
+    AsVertical,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

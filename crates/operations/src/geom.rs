@@ -233,6 +233,15 @@ pub fn edges_of_pline(p: &Polyline<f64>) -> Vec<Edge2> {
 /// own distance. Straight neighbours meet at their lines' intersection (so a
 /// product edge is extended along its own line); elsewhere a straight join.
 pub fn move_edges(edges: &[Edge2], out: &[f64]) -> Vec<Edge2> {
+    move_edges_tagged(edges, out)
+        .into_iter()
+        .map(|(e, _)| e)
+        .collect()
+}
+
+/// `move_edges`, each result edge with the index of the edge it moves
+/// (`None` for a join between two).
+pub fn move_edges_tagged(edges: &[Edge2], out: &[f64]) -> Vec<(Edge2, Option<usize>)> {
     let n = edges.len();
     let moved: Vec<Edge2> = edges
         .iter()
@@ -270,7 +279,7 @@ pub fn move_edges(edges: &[Edge2], out: &[f64]) -> Vec<Edge2> {
             }
         })
         .collect();
-    let mut res: Vec<Edge2> = Vec::with_capacity(2 * n);
+    let mut res: Vec<(Edge2, Option<usize>)> = Vec::with_capacity(2 * n);
     // Start point of each moved edge after joining with its predecessor,
     // and an optional join segment before it.
     let mut starts = vec![DVec2::ZERO; n];
@@ -287,7 +296,8 @@ pub fn move_edges(edges: &[Edge2], out: &[f64]) -> Vec<Edge2> {
         let d1 = p.b - p.a;
         let d2 = q.b - q.a;
         let cr = d1.perp_dot(d2);
-        let reach = op.max(oq);
+        // Edges move in (negative) as well as out.
+        let reach = op.abs().max(oq.abs());
         if straight && cr.abs() > 1e-9 * d1.length() * d2.length() {
             let t = (q.a - p.a).perp_dot(d2) / cr;
             let x = p.a + d1 * t;
@@ -304,23 +314,29 @@ pub fn move_edges(edges: &[Edge2], out: &[f64]) -> Vec<Edge2> {
     }
     for i in 0..n {
         if let Some(j) = joins[i] {
-            res.push(Edge2 {
-                a: j,
-                b: starts[i],
-                bulge: 0.0,
-            });
+            res.push((
+                Edge2 {
+                    a: j,
+                    b: starts[i],
+                    bulge: 0.0,
+                },
+                None,
+            ));
         }
         let end = match joins[(i + 1) % n] {
             Some(j) => j,
             None => starts[(i + 1) % n],
         };
-        res.push(Edge2 {
-            a: starts[i],
-            b: end,
-            bulge: moved[i].bulge,
-        });
+        res.push((
+            Edge2 {
+                a: starts[i],
+                b: end,
+                bulge: moved[i].bulge,
+            },
+            Some(i),
+        ));
     }
-    res.retain(|e| e.a.distance_squared(e.b) > 1e-18);
+    res.retain(|(e, _)| e.a.distance_squared(e.b) > 1e-18);
     res
 }
 

@@ -6,13 +6,14 @@ use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 use glam::{DVec2, DVec3};
 use thinplan_knowledge::{
     FullCut, Knowledge, LevelEntry, Machine, Material, Method, MethodKnowledge, MirrorLayers,
-    Pattern, RestPass, RunUp, SidesMatch, SpindleDirection, Tool, ToolChoice, ToolSet, WallRest,
+    Pattern, RestPass, RunUp, SidesMatch, SlopedFaces, SpindleDirection, Tool, ToolChoice, ToolSet,
+    WallRest,
 };
-use thinplan_plan::{Adjacency, MachiningFeature, Provenance, ProvenanceSource};
+use thinplan_plan::{Adjacency, EdgeSlopes, MachiningFeature, Provenance, ProvenanceSource};
 
 use crate::geom::{
-    adjacency_edges, boundary_distance, edges_of_pline, inside, move_edges, oriented,
-    pline_from_edges, segment_inside, Area, Edge2,
+    adjacency_edges, boundary_distance, edges_of_pline, inside, move_edges, move_edges_tagged,
+    oriented, pline_from_edges, segment_inside, Area, Edge2,
 };
 use crate::path::{helix, ramp, rounded, seg_points, Builder, Kind, LMove, Seg2, Space};
 
@@ -85,6 +86,10 @@ fn pinched(block: &[DVec2]) -> bool {
 }
 /// Distance slack for "on the product offset" (mm).
 const EPS: f64 = 1e-6;
+/// Distance slack of the sloped-face safety net (mm): the tool's profile
+/// is tangent to the face there, and the torus's sagitta between the
+/// net's sample heights is smaller still.
+const EPS_SLOPE: f64 = 1e-5;
 
 /// The geometry of a feature for one tool.
 struct Geometry {
@@ -100,6 +105,15 @@ struct Geometry {
     keep_out: Vec<Edge2>,
     /// The region was clipped to the free space (straight edges only).
     clipped: bool,
+    /// Sloped product faces (`MachiningFeature::slopes`) were followed:
+    /// the product edges above are moved to where the tool's profile
+    /// touches the face.
+    sloped: bool,
+    /// The product's edges at heights over the tool's profile, each with
+    /// the tool's section radius there: the safety net for sloped faces
+    /// (every tool centre at least that far from them). Empty when not
+    /// `sloped`.
+    slope_check: Vec<(f64, Vec<Edge2>)>,
 }
 
 fn sides_class(edges: &[(Vec<Edge2>, Vec<Adjacency>)]) -> SidesMatch {
@@ -150,10 +164,39 @@ fn geometry(
     tool: &Tool,
     free: Option<&crate::free::Shapes>,
     removed: Option<&crate::free::Shapes>,
+    slopes: bool,
 ) -> Option<Geometry> {
+    use i_overlay::core::fill_rule::FillRule;
+    use i_overlay::core::overlay_rule::OverlayRule;
+    use i_overlay::float::single::SingleFloatOverlay;
     let d = tool.diameter;
     let r = d / 2.0;
-    let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
+    let plain = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
+    // Sloped product faces: the product edges move to where the tool's
+    // profile touches the face, and the space between is free.
+    let shifts = if slopes { slope_shifts(f, tool) } else { None };
+    let (edges, free_sloped) = match &shifts {
+        None => (plain.clone(), None),
+        Some(sh) => {
+            let moved = moved_edges(&plain, sh);
+            let grown = free.map(|free| {
+                let region: Vec<Vec<[f64; 2]>> = moved
+                    .iter()
+                    .map(|(es, _)| es.iter().map(|e| [e.a.x, e.a.y]).collect())
+                    .collect();
+                let region: crate::free::Shapes = region.overlay_as::<i64>(
+                    &Vec::<Vec<[f64; 2]>>::new(),
+                    OverlayRule::Subject,
+                    FillRule::NonZero,
+                );
+                let a: Vec<Vec<[f64; 2]>> = free.iter().flatten().cloned().collect();
+                let b: Vec<Vec<[f64; 2]>> = region.into_iter().flatten().collect();
+                a.overlay_as::<i64>(&b, OverlayRule::Union, FillRule::NonZero)
+            });
+            (moved, grown)
+        }
+    };
+    let free = free_sloped.as_ref().or(free);
     let mut product = Vec::new();
     let keep_out: Vec<Edge2> = free
         .map(|free| {
@@ -228,9 +271,6 @@ fn geometry(
         return None;
     }
     if let Some(free) = clip {
-        use i_overlay::core::fill_rule::FillRule;
-        use i_overlay::core::overlay_rule::OverlayRule;
-        use i_overlay::float::single::SingleFloatOverlay;
         let mut grown = grown_region(&edges, m, d, false);
         if let Some(removed) = removed {
             // An edge counts as open by its midpoint; past it the tool may
@@ -269,8 +309,8 @@ fn geometry(
         return None;
     }
     let centre_polys = centre.polygons(STEP);
-    let mut region_loops = vec![pline_from_edges(&edges[0].0, true)];
-    for (es, _) in &edges[1..] {
+    let mut region_loops = vec![pline_from_edges(&plain[0].0, true)];
+    for (es, _) in &plain[1..] {
         region_loops.push(pline_from_edges(es, true));
     }
     let region_polys = Area {
@@ -285,7 +325,167 @@ fn geometry(
         product,
         keep_out,
         clipped: clip.is_some(),
+        sloped: shifts.is_some(),
+        slope_check: match shifts {
+            Some(_) => slope_check(f, tool, &plain),
+            None => Vec::new(),
+        },
     })
+}
+
+/// The tool's section radius `h` above its tip (bull-nose profile).
+fn section_radius(tool: &Tool, h: f64) -> f64 {
+    let r = tool.diameter / 2.0;
+    let rc = tool.corner_radius.clamp(0.0, r);
+    if h >= rc {
+        r
+    } else if h <= 0.0 {
+        r - rc
+    } else {
+        r - rc + (rc * rc - (rc - h) * (rc - h)).max(0.0).sqrt()
+    }
+}
+
+/// The least distance from the tool's axis to a product edge at which no
+/// height of the tool's profile (tip at `tip`) crosses the face beyond it:
+/// the largest section radius less how far the face lies beyond the edge,
+/// over every height. Exact for the piecewise-linear face: the maximum lies
+/// at a sample height, at the corner radius's top, or where the torus is
+/// tangent to a piece.
+fn reach_needed(s: &EdgeSlopes, offsets: &[f64], tip: f64, tool: &Tool) -> f64 {
+    let rc = tool.corner_radius.clamp(0.0, tool.diameter / 2.0);
+    let mut hs = vec![0.0, rc];
+    hs.extend(s.heights.iter().map(|z| z - tip).filter(|h| *h > 0.0));
+    for w in s.heights.windows(2) {
+        let (h0, h1) = ((w[0] - tip).max(0.0), (w[1] - tip).min(rc));
+        if h1 <= h0 || w[1] - w[0] <= 1e-12 {
+            continue;
+        }
+        let c = (s.beyond(offsets, w[1]) - s.beyond(offsets, w[0])) / (w[1] - w[0]);
+        if c > 0.0 {
+            let h = rc * (1.0 - c / (1.0 + c * c).sqrt());
+            if h > h0 && h < h1 {
+                hs.push(h);
+            }
+        }
+    }
+    hs.iter()
+        .map(|&h| section_radius(tool, h) - s.beyond(offsets, tip + h))
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// How far each edge of the feature's loops moves towards the product for
+/// `tool`: r less the reach it needs there (0 for vertical faces and
+/// non-product edges). `None` where nothing moves.
+fn slope_shifts(f: &MachiningFeature, tool: &Tool) -> Option<Vec<Vec<f64>>> {
+    let s = f.slopes.as_ref()?;
+    let r = tool.diameter / 2.0;
+    let per = |o: &Vec<f64>| -> f64 {
+        if o.is_empty() {
+            0.0
+        } else {
+            let v = r - reach_needed(s, o, f.shape.z_min, tool);
+            if v.abs() < 1e-9 {
+                0.0
+            } else {
+                v
+            }
+        }
+    };
+    let mut v: Vec<Vec<f64>> = vec![s.side.iter().map(per).collect()];
+    v.extend(s.holes.iter().map(|h| h.iter().map(per).collect()));
+    v.iter().flatten().any(|x| *x != 0.0).then_some(v)
+}
+
+/// The loops with each edge moved out by its own distance (`move_edges`),
+/// keeping each edge's adjacency (a join next to a product edge counts as
+/// product).
+fn moved_edges(
+    loops: &[(Vec<Edge2>, Vec<Adjacency>)],
+    out: &[Vec<f64>],
+) -> Vec<(Vec<Edge2>, Vec<Adjacency>)> {
+    loops
+        .iter()
+        .enumerate()
+        .map(|(k, (es, adj))| {
+            let o: Vec<f64> = (0..es.len())
+                .map(|i| out.get(k).and_then(|v| v.get(i)).copied().unwrap_or(0.0))
+                .collect();
+            let n = es.len();
+            let tagged = move_edges_tagged(es, &o);
+            let m = tagged.len();
+            (0..m)
+                .map(|j| {
+                    let (e, tag) = tagged[j];
+                    let a = match tag {
+                        Some(i) => adj[i],
+                        // A join sits before the next edge's moved copy.
+                        None => match tagged[(j + 1) % m].1 {
+                            Some(i)
+                                if adj[i] != Adjacency::Product
+                                    && adj[(i + n - 1) % n] != Adjacency::Product =>
+                            {
+                                adj[i]
+                            }
+                            _ => Adjacency::Product,
+                        },
+                    };
+                    (e, a)
+                })
+                .unzip()
+        })
+        .collect()
+}
+
+/// The product's edges at heights over the tool's profile (its corner
+/// radius in 32 steps of angle, and every height the faces were sampled
+/// at), each with the tool's section radius there.
+fn slope_check(
+    f: &MachiningFeature,
+    tool: &Tool,
+    plain: &[(Vec<Edge2>, Vec<Adjacency>)],
+) -> Vec<(f64, Vec<Edge2>)> {
+    let Some(s) = f.slopes.as_ref() else {
+        return Vec::new();
+    };
+    let tip = f.shape.z_min;
+    let rc = tool.corner_radius.clamp(0.0, tool.diameter / 2.0);
+    let mut hs: Vec<f64> = (0..=32)
+        .map(|k| rc * (1.0 - (k as f64 * std::f64::consts::FRAC_PI_2 / 32.0).cos()))
+        .collect();
+    hs.extend(s.heights.iter().map(|z| z - tip).filter(|h| *h > 0.0));
+    hs.sort_by(f64::total_cmp);
+    hs.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let offsets = |k: usize, i: usize| -> Option<&Vec<f64>> {
+        if k == 0 {
+            s.side.get(i)
+        } else {
+            s.holes.get(k - 1).and_then(|h| h.get(i))
+        }
+    };
+    hs.iter()
+        .map(|&h| {
+            let out: Vec<Vec<f64>> = plain
+                .iter()
+                .enumerate()
+                .map(|(k, (es, _))| {
+                    (0..es.len())
+                        .map(|i| offsets(k, i).map_or(0.0, |o| s.beyond(o, tip + h)))
+                        .collect()
+                })
+                .collect();
+            let product: Vec<Edge2> = moved_edges(plain, &out)
+                .into_iter()
+                .flat_map(|(es, adj)| {
+                    es.into_iter()
+                        .zip(adj)
+                        .filter(|(_, a)| *a == Adjacency::Product)
+                        .map(|(e, _)| e)
+                })
+                .collect();
+            (section_radius(tool, h), product)
+        })
+        .collect()
 }
 
 /// The polygons less every point closer than `reach` to a product edge
@@ -1283,6 +1483,49 @@ fn plan_band(
     free: Option<&crate::free::Shapes>,
     removed: Option<&crate::free::Shapes>,
 ) -> Result<Made, String> {
+    if f.slopes.is_none() || env.k.methods.sloped_faces == SlopedFaces::AsVertical {
+        return plan_band_with(f, env, free, removed, false);
+    }
+    // Sloped product faces: followed where the safety net holds, else
+    // planned as vertical at the region's section (material stays, none
+    // is cut beyond it), and said.
+    match plan_band_with(f, env, free, removed, true) {
+        Ok(mut m) => {
+            // Provenance: how far the product edges moved for each tool.
+            for op in &mut m.ops {
+                let Some(tool) = env.tools.tools.iter().find(|t| t.id == op.tool) else {
+                    continue;
+                };
+                if let Some(sh) = slope_shifts(f, tool) {
+                    let most =
+                        sh.into_iter()
+                            .flatten()
+                            .fold(0.0, |a: f64, b| if b.abs() > a.abs() { b } else { a });
+                    op.provenance.values.insert("slope_shift_mm".into(), most);
+                    op.provenance.note.push_str("; sloped_faces=Follow");
+                }
+            }
+            Ok(m)
+        }
+        Err(e) => {
+            let mut m = plan_band_with(f, env, free, removed, false)?;
+            m.warnings.push(format!(
+                "{}: its sloped product faces cannot be followed ({e}); planned as vertical, \
+                 material stays on them",
+                f.id
+            ));
+            Ok(m)
+        }
+    }
+}
+
+fn plan_band_with(
+    f: &MachiningFeature,
+    env: &Env,
+    free: Option<&crate::free::Shapes>,
+    removed: Option<&crate::free::Shapes>,
+    slopes: bool,
+) -> Result<Made, String> {
     let mk = &env.k.methods;
     let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
     if edges[0].0.len() < 2 {
@@ -1345,7 +1588,7 @@ fn plan_band(
     }
     let (tool, g) = cands
         .iter()
-        .find_map(|t| geometry(f, m, t, free, removed).map(|g| (*t, g)))
+        .find_map(|t| geometry(f, m, t, free, removed, slopes).map(|g| (*t, g)))
         .ok_or_else(|| {
             let smallest = env
                 .tools
@@ -2008,7 +2251,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     // product is open, and the removed space is the whole free space.
     let Some((small, g2, own)) = cands
         .iter()
-        .find_map(|t| geometry(c.f, c.m, t, c.free, c.removed).map(|g| (*t, g, false)))
+        .find_map(|t| geometry(c.f, c.m, t, c.free, c.removed, c.g.sloped).map(|g| (*t, g, false)))
         .or_else(|| match rest {
             Rest::Wall(w) if w.run_last && cands.is_empty() => {
                 let mut f = c.f.clone();
@@ -2022,7 +2265,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
                     .iter_mut()
                     .flat_map(|h| h.iter_mut())
                     .for_each(open);
-                geometry(&f, c.m, main, c.free, c.free).map(|g| (main, g, true))
+                geometry(&f, c.m, main, c.free, c.free, c.g.sloped).map(|g| (main, g, true))
             }
             _ => None,
         })
@@ -2494,6 +2737,11 @@ fn check(
         crate::geom::EdgeGrid::new(&g.product, g.r),
         crate::geom::EdgeGrid::new(&g.keep_out, g.r),
     );
+    let slope_grids: Vec<crate::geom::EdgeGrid> = g
+        .slope_check
+        .iter()
+        .map(|(rho, e)| crate::geom::EdgeGrid::new(e, *rho))
+        .collect();
     let near = |p: DVec2, edges: &[Edge2], grid: &crate::geom::EdgeGrid| {
         grid.candidates(p)
             .iter()
@@ -2531,6 +2779,17 @@ fn check(
             }
             if p.z < z_min - 1e-9 {
                 return Err(format!("a move goes below the floor at z {:.4}", p.z));
+            }
+            for ((rho, edges), grid) in g.slope_check.iter().zip(&slope_grids) {
+                let dist = near(p.truncate(), edges, grid);
+                if dist < rho - EPS_SLOPE {
+                    return Err(format!(
+                        "a move would touch a sloped product face: tool centre ({:.3}, {:.3}, \
+                         {:.3}) is {dist:.4} mm from it where the tool's section radius is \
+                         {rho:.3}",
+                        p.x, p.y, p.z
+                    ));
+                }
             }
             let own = near(p.truncate(), &g.product, &grids.0);
             let other = near(p.truncate(), &g.keep_out, &grids.1);

@@ -198,6 +198,7 @@ mod tests {
             ],
             hole_adjacency: vec![],
             bottom_adjacency: Adjacency::Product,
+            slopes: None,
             provenance: Provenance::new(ProvenanceSource::Default, "test"),
         };
         let free = vec![vec![rect(0.0, 0.0, 60.0, 60.0)]];

@@ -353,7 +353,50 @@ pub struct MachiningFeature {
     /// Adjacency per edge of each hole (island), in `shape.region.holes` order.
     pub hole_adjacency: Vec<Vec<Adjacency>>,
     pub bottom_adjacency: Adjacency,
+    /// Where product faces beside the feature slope (sloped slabs, stage
+    /// 6): how far each product edge's face lies beyond it at the slab's
+    /// bottom and top. Absent where every product face is vertical.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slopes: Option<EdgeSlopes>,
     pub provenance: Provenance,
+}
+
+/// The product faces beside a machining feature's edges, sampled at
+/// `heights` of the set-up frame (ascending; the region's edges are the
+/// section at one of them, where every offset is 0): how far the face lies
+/// beyond each edge at each height, mm (away from the region: positive
+/// where the face recedes, negative where the product reaches into the
+/// region). Linear in between; taken as vertical below the first height
+/// and above the last. Non-product edges carry no offsets (empty).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeSlopes {
+    pub heights: Vec<f64>,
+    /// Per edge of the outer loop: an offset per height, or none.
+    pub side: Vec<Vec<f64>>,
+    /// Per edge of each hole, in `shape.region.holes` order.
+    pub holes: Vec<Vec<Vec<f64>>>,
+}
+
+impl EdgeSlopes {
+    /// How far the face beyond an edge with `offsets` lies beyond it at
+    /// height `z` (mm; see the type). 0 for an edge with none.
+    pub fn beyond(&self, offsets: &[f64], z: f64) -> f64 {
+        let h = &self.heights;
+        if offsets.len() != h.len() || h.is_empty() {
+            return 0.0;
+        }
+        if z <= h[0] {
+            return offsets[0];
+        }
+        for i in 1..h.len() {
+            if z <= h[i] {
+                let t = (z - h[i - 1]) / (h[i] - h[i - 1]).max(1e-12);
+                return offsets[i - 1] + (offsets[i] - offsets[i - 1]) * t;
+            }
+        }
+        offsets[h.len() - 1]
+    }
 }
 
 impl MachiningFeature {

@@ -21,10 +21,10 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use glam::DVec3;
 use thinplan_brep::{Brep, Frame};
-use thinplan_knowledge::{FeatureSelector, Knowledge, RemainingOwner, TieBreak};
+use thinplan_knowledge::{FeatureSelector, Knowledge, RemainingOwner, ShallowSlabs, TieBreak};
 use thinplan_plan::{
-    Adjacency, Constraint, ConstraintKind, MachiningFeature, MachiningFeatureId, Plan, Prism,
-    PrismFrame, ProfileLoop, Provenance, ProvenanceSource, Refusal, Region, Stage,
+    Adjacency, Constraint, ConstraintKind, EdgeSlopes, MachiningFeature, MachiningFeatureId, Plan,
+    Prism, PrismFrame, ProfileLoop, Provenance, ProvenanceSource, Refusal, Region, Stage,
     StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
 };
 
@@ -141,6 +141,8 @@ struct Slab {
     lo: f64,
     hi: f64,
     part: Shapes,
+    /// Crossed by a sloped face (subdivided by `sloped_slab_thickness`).
+    sloped: bool,
 }
 
 /// A piece of a resolved feature before it gets its id.
@@ -196,18 +198,19 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
         &claims,
         lo.z,
         hi.z,
-        kn.sloped_slab_thickness,
+        (kn.sloped_slab_thickness, kn.shallow_slabs.as_ref()),
     );
     let mut gaps = 0;
     let slabs: Vec<Slab> = slabs
         .into_iter()
-        .map(|(a, b)| {
+        .map(|(a, b, sloped)| {
             let (loops, g) = local.section(0.5 * (a + b));
             gaps += g;
             Slab {
                 lo: a,
                 hi: b,
                 part: section::fill(&loops),
+                sloped,
             }
         })
         .collect();
@@ -428,6 +431,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
             side_adjacency: Vec::new(),
             hole_adjacency: Vec::new(),
             bottom_adjacency: Adjacency::Open,
+            slopes: None,
             provenance,
         });
     }
@@ -478,7 +482,192 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
     blocked_from_up(&geo, &slabs, kn.sliver_area, &mut out);
     out.order = graph.topological_order();
     adjacency(&mut out, &geo, &slabs, [lo.x, lo.y, hi.x, hi.y], lo.z);
+    let reach = (hi - lo).length();
+    // Faces are sampled up to where the largest corner radius reaches.
+    let above = k.tool_set(&plan.setup.tool_set).map_or(0.0, |set| {
+        set.tools
+            .iter()
+            .map(|t| t.corner_radius)
+            .fold(0.0, f64::max)
+    });
+    let mut sections: SectionCache = BTreeMap::new();
+    for (f, g) in geo.iter().enumerate() {
+        if g.bottom_slab == g.top_slab && slabs[g.bottom_slab].sloped {
+            let mf = &out.features[f];
+            let slopes = edge_slopes(
+                &local,
+                g,
+                (slabs[g.top_slab].hi, hi.z),
+                (&mf.side_adjacency, &mf.hole_adjacency),
+                (above, reach),
+                &mut sections,
+            );
+            out.features[f].slopes = slopes;
+        }
+    }
     Ok(out)
+}
+
+/// How far the product face beyond each product edge of a one-slab feature
+/// lies beyond the edge (its region is the section at the slab's middle),
+/// sampled at the slab's bottom, middle and top and on up by the slab's
+/// thickness until `above` over its top (where a tool's corner radius
+/// reaches) or past the part's `top`. `None` where every face is vertical.
+fn edge_slopes(
+    local: &LocalMesh,
+    g: &Geo,
+    (hi, top): (f64, f64),
+    adjacency: (&[Adjacency], &[Vec<Adjacency>]),
+    (above, reach): (f64, f64),
+    sections: &mut SectionCache,
+) -> Option<EdgeSlopes> {
+    let (lo, at) = (g.lo, 0.5 * (g.lo + hi));
+    let t = hi - lo;
+    let mut heights = vec![lo, at, hi];
+    let mut z = hi;
+    // Above the part's top the sections are empty: nothing stands there.
+    while z < hi + above - 1e-9 && z < top + t && t > 1e-9 {
+        z += t;
+        heights.push(z);
+    }
+    // Just inside: the slab bounds are vertex heights, where a section is
+    // degenerate (the face moves `EPS_SECTION`·slope there: nothing).
+    let probe: Vec<f64> = heights
+        .iter()
+        .enumerate()
+        .map(|(i, &z)| {
+            if i == 0 {
+                z + EPS_SECTION
+            } else {
+                z - EPS_SECTION
+            }
+        })
+        .collect();
+    for (i, z) in probe.iter().enumerate() {
+        if i != 1 {
+            sections.entry(z.to_bits()).or_insert_with(|| {
+                let (loops, _) = local.section(*z);
+                let part = section::fill(&loops);
+                (loops, part)
+            });
+        }
+    }
+    let mut any = false;
+    let mut per_loop = |contour: &Vec<[f64; 2]>, adj: &[Adjacency]| -> Vec<Vec<f64>> {
+        let n = contour.len();
+        (0..n)
+            .map(|i| {
+                if adj.get(i) != Some(&Adjacency::Product) {
+                    return Vec::new();
+                }
+                let (a, b) = (contour[i], contour[(i + 1) % n]);
+                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                let len = (dx * dx + dy * dy).sqrt();
+                if len < 1e-9 {
+                    return Vec::new();
+                }
+                let p = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+                // Outward (towards the product): right of the edge.
+                let nrm = [dy / len, -dx / len];
+                let e: Vec<f64> = probe
+                    .iter()
+                    .enumerate()
+                    .map(|(k, z)| {
+                        if k == 1 {
+                            return 0.0;
+                        }
+                        let (loops, part) = &sections[&z.to_bits()];
+                        let v = face_beyond(loops, part, p, nrm, reach);
+                        // Rounded: the plan file stays readable.
+                        let v = (v * 1e9).round() / 1e9;
+                        if v.abs() < 1e-6 {
+                            0.0
+                        } else {
+                            v
+                        }
+                    })
+                    .collect();
+                if e.iter().all(|v| *v == 0.0) {
+                    return Vec::new();
+                }
+                any = true;
+                e
+            })
+            .collect()
+    };
+    let side = per_loop(&g.region[0][0], adjacency.0);
+    let holes: Vec<Vec<Vec<f64>>> = g.region[0][1..]
+        .iter()
+        .zip(adjacency.1)
+        .map(|(c, a)| per_loop(c, a))
+        .collect();
+    any.then_some(EdgeSlopes {
+        heights,
+        side,
+        holes,
+    })
+}
+
+/// The part's sections by height (bits): the loops and their region.
+type SectionCache = BTreeMap<u64, (Vec<Vec<[f64; 2]>>, Shapes)>;
+
+/// How far inside a slab its bounds' sections are taken (mm).
+const EPS_SECTION: f64 = 1e-4;
+
+/// Where the part's section boundary crosses the line through `p` along
+/// the unit normal `n` (towards the product): the signed distance along
+/// `n` of the crossing nearest `p` on the side the face lies (towards the
+/// region where `p` is in the product, else towards the product). Where
+/// the line meets none: the product covers the whole reach (`-reach`), or
+/// the nearest product in any direction (`reach` where there is none).
+fn face_beyond(
+    loops: &[Vec<[f64; 2]>],
+    part: &Shapes,
+    p: [f64; 2],
+    n: [f64; 2],
+    reach: f64,
+) -> f64 {
+    let inside = section::contains(part, p);
+    let dir = if inside { [-n[0], -n[1]] } else { n };
+    let mut best = f64::INFINITY;
+    for c in loops {
+        let m = c.len();
+        for i in 0..m {
+            let (a, b) = (c[i], c[(i + 1) % m]);
+            let e = [b[0] - a[0], b[1] - a[1]];
+            let den = dir[0] * e[1] - dir[1] * e[0];
+            if den.abs() < 1e-15 {
+                continue;
+            }
+            let w = [a[0] - p[0], a[1] - p[1]];
+            let t = (w[0] * e[1] - w[1] * e[0]) / den;
+            let u = (w[0] * dir[1] - w[1] * dir[0]) / den;
+            if t >= 0.0 && (0.0..=1.0).contains(&u) && t < best {
+                best = t;
+            }
+        }
+    }
+    match (best <= reach, inside) {
+        (true, true) => -best,
+        (true, false) => best,
+        (false, true) => -reach,
+        (false, false) => loops
+            .iter()
+            .flat_map(|c| (0..c.len()).map(move |i| seg_distance(p, c[i], c[(i + 1) % c.len()])))
+            .fold(reach, f64::min),
+    }
+}
+
+fn seg_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
+    let l2 = ab[0] * ab[0] + ab[1] * ab[1];
+    let t = if l2 > 0.0 {
+        ((ap[0] * ab[0] + ap[1] * ab[1]) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let d = [ap[0] - ab[0] * t, ap[1] - ab[1] * t];
+    (d[0] * d[0] + d[1] * d[1]).sqrt()
 }
 
 /// The plan-view geometry of a resolved feature.
@@ -698,7 +887,8 @@ fn convex_hull(mut pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
 }
 
 /// Slab boundaries: the blank's bottom and top, every B-rep vertex height,
-/// every claim's bounds; slabs crossed by sloped faces subdivided.
+/// every claim's bounds; slabs crossed by sloped faces subdivided (and
+/// flagged).
 fn slabs(
     brep: &Brep,
     local: &LocalMesh,
@@ -706,8 +896,8 @@ fn slabs(
     claims: &[Claim],
     zlo: f64,
     zhi: f64,
-    sloped_max: f64,
-) -> Vec<(f64, f64)> {
+    (sloped_max, shallow): (f64, Option<&ShallowSlabs>),
+) -> Vec<(f64, f64, bool)> {
     let mut zs: Vec<f64> = vec![zlo, zhi];
     zs.extend(brep.vertices.iter().map(|v| frame.to_local(v.point).z));
     zs.extend(claims.iter().flat_map(|c| [c.lo, c.hi]));
@@ -719,8 +909,9 @@ fn slabs(
             levels.push(z.clamp(zlo, zhi));
         }
     }
-    // Height intervals of sloped triangles.
-    let mut sloped: Vec<(f64, f64)> = Vec::new();
+    // Height intervals of sloped triangles, with the sine of their slope
+    // from horizontal.
+    let mut sloped: Vec<(f64, f64, f64)> = Vec::new();
     for t in &local.triangles {
         let v = t.map(|i| local.positions[i as usize]);
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
@@ -732,27 +923,49 @@ fn slabs(
         if nz > 1e-7 && nz < 1.0 - 1e-7 {
             let a = v[0].z.min(v[1].z).min(v[2].z);
             let b = v[0].z.max(v[1].z).max(v[2].z);
-            sloped.push((a, b));
+            sloped.push((a, b, (1.0 - nz * nz).max(0.0).sqrt()));
         }
     }
     sloped.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out = Vec::new();
+    let mut out: Vec<(f64, f64, bool)> = Vec::new();
     for w in levels.windows(2) {
         let (a, b) = (w[0], w[1]);
         let is_sloped = sloped
             .iter()
             .take_while(|s| s.0 < b - EPS_Z)
             .any(|s| s.1 > a + EPS_Z);
-        let n = if is_sloped {
-            ((b - a) / sloped_max).ceil().max(1.0) as usize
-        } else {
-            1
+        let Some(sh) = shallow.filter(|_| is_sloped) else {
+            let n = if is_sloped {
+                ((b - a) / sloped_max).ceil().max(1.0) as usize
+            } else {
+                1
+            };
+            for i in 0..n {
+                out.push((
+                    a + (b - a) * i as f64 / n as f64,
+                    a + (b - a) * (i + 1) as f64 / n as f64,
+                    is_sloped,
+                ));
+            }
+            continue;
         };
-        for i in 0..n {
-            out.push((
-                a + (b - a) * i as f64 / n as f64,
-                a + (b - a) * (i + 1) as f64 / n as f64,
-            ));
+        // Bottom up: each slab as thick as the shallowest face within the
+        // largest thickness above allows (the rest of the band split
+        // evenly at that thickness, so no sliver is left at its top).
+        let mut z = a;
+        while z < b - EPS_Z {
+            let reach = (z + sloped_max).min(b);
+            let t = sloped
+                .iter()
+                .take_while(|s| s.0 < reach - EPS_Z)
+                .filter(|s| s.1 > z + EPS_Z)
+                .map(|s| sh.along_face * s.2)
+                .fold(sloped_max, f64::min)
+                .max(sh.min_thickness);
+            let n = ((b - z) / t - 1e-9).ceil().max(1.0);
+            let next = if n <= 1.0 { b } else { z + (b - z) / n };
+            out.push((z, next, true));
+            z = next;
         }
     }
     out

@@ -91,6 +91,7 @@ pub fn feature(
         side_adjacency: side,
         hole_adjacency,
         bottom_adjacency: bottom,
+        slopes: None,
         provenance: Provenance::new(ProvenanceSource::Default, "test"),
     }
 }
