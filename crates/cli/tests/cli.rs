@@ -1004,3 +1004,66 @@ fn links_on_the_in_process_stock_run_lower_and_never_into_stock() {
     println!("{planned} links between operations planned, {lowered} inside lowered");
     assert!(planned > 0 && lowered > 0.0);
 }
+
+/// Sloped product faces (issue 5): the boundary pass that follows the
+/// chamfer (`sloped_faces: Follow`, the default) against one that takes it
+/// as vertical at each slab's middle (`AsVertical`), both replayed by the
+/// independent stock simulation: following takes the bands the corner
+/// radius left on the face and cuts no deeper — no gouge even on a finer
+/// grid at a tighter tolerance — and says so in each operation's
+/// provenance.
+#[test]
+fn following_a_sloped_face_leaves_nothing_on_it_and_never_cuts_it() {
+    let d = tmp("sloped");
+    let k = knowledge_with(
+        &d,
+        "methods.ron",
+        "sloped_faces: Follow,",
+        "sloped_faces: AsVertical,",
+    );
+    let name = "chamfered_rib";
+    let k = k.to_str().unwrap();
+    let (_, follow_plan, follow) = plan_and_simulate(name, &d, "follow", &[]);
+    let (_, vertical_plan, vertical) = plan_and_simulate(name, &d, "vertical", &["--knowledge", k]);
+    let missed = |v: &Value| v["leftover_missed"]["volume_mm3"].as_f64().unwrap();
+    let removed = |v: &Value| v["removed_volume_mm3"].as_f64().unwrap();
+    println!(
+        "missed {:.2} → {:.2} mm³, removed {:.1} → {:.1} mm³",
+        missed(&vertical),
+        missed(&follow),
+        removed(&vertical),
+        removed(&follow)
+    );
+    assert!(missed(&follow) <= 0.1, "{}", follow["leftover_missed"]);
+    assert!(
+        missed(&vertical) >= missed(&follow) + 1.0,
+        "{}",
+        vertical["leftover_missed"]
+    );
+    assert!(removed(&follow) > removed(&vertical));
+    // A finer grid at a tighter tolerance: still no gouge.
+    let out = thinplan()
+        .args(["simulate", "builtin:chamfered_rib"])
+        .arg(d.join("follow.ngc"))
+        .arg("--tool-table")
+        .arg(d.join("follow.tbl"))
+        .args(["--cell", "0.1", "--tol", "0.02", "--json"])
+        .output()
+        .unwrap();
+    let fine: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(fine["gouges"]["cells"], 0, "{}", fine["gouges"]);
+    // Provenance: how far the edges moved, on the operations that moved.
+    let shifted = |p: &Path| -> Vec<f64> {
+        thinplan_plan::load(p)
+            .unwrap()
+            .operations
+            .iter()
+            .filter_map(|o| o.provenance.values.get("slope_shift_mm").copied())
+            .collect()
+    };
+    let s = shifted(&follow_plan);
+    assert!(!s.is_empty());
+    // Towards a face that recedes upwards, never as far as the radius.
+    assert!(s.iter().all(|v| *v > 0.0 && *v < 1.0), "{s:?}");
+    assert!(shifted(&vertical_plan).is_empty());
+}

@@ -2811,3 +2811,100 @@ fn check(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use thinplan_knowledge::ToolKind;
+
+    fn bull_nose(d: f64, rc: f64) -> Tool {
+        Tool {
+            id: "t".into(),
+            kind: ToolKind::BullNoseEndMill,
+            diameter: d,
+            corner_radius: rc,
+            flutes: 3,
+            flute_length: 30.0,
+            stickout: 60.0,
+            shank_diameter: d,
+            holder_diameter: 50.0,
+            holder_length: 60.0,
+            max_slot_depth_ratio: 0.5,
+        }
+    }
+
+    /// A 45° chamfer sampled as stage 6 does (section at `at`, slabs 0.5
+    /// thick, sampled 1.5 mm above): the face lies `z − at` beyond the edge.
+    fn chamfer(at: f64) -> (EdgeSlopes, Vec<f64>) {
+        let heights = vec![at - 0.25, at, at + 0.25, at + 0.75, at + 1.25, at + 1.75];
+        let offsets = heights.iter().map(|z| z - at).collect();
+        (
+            EdgeSlopes {
+                heights,
+                side: Vec::new(),
+                holes: Vec::new(),
+            },
+            offsets,
+        )
+    }
+
+    /// The torus tangent to a 45° plane (the tangency worked out by hand):
+    /// the tool's edge stands rc·(1 − tan 22.5°) inside the face's trace at
+    /// the tip's height, so the axis is that much less than r from the
+    /// trace, which lies `at − tip` inside the edge.
+    #[test]
+    fn the_torus_touches_a_chamfer_where_the_tangency_says() {
+        for (d, rc) in [(20.0, 1.0), (12.0, 0.5), (10.0, 3.0), (8.0, 0.0)] {
+            let tool = bull_nose(d, rc);
+            let (s, o) = chamfer(50.0);
+            let tip = 49.75;
+            let want = d / 2.0 - rc * (1.0 - (std::f64::consts::PI / 8.0).tan()) + (50.0 - tip);
+            let got = reach_needed(&s, &o, tip, &tool);
+            assert!((got - want).abs() < 1e-9, "d {d} rc {rc}: {got} vs {want}");
+        }
+        // A vertical face needs the full radius, whatever the corner.
+        let s = EdgeSlopes {
+            heights: vec![0.0, 1.0],
+            side: Vec::new(),
+            holes: Vec::new(),
+        };
+        assert!((reach_needed(&s, &[0.0, 0.0], 0.0, &bull_nose(20.0, 1.0)) - 10.0).abs() < 1e-12);
+    }
+
+    proptest! {
+        /// The exact maximum against a dense sampling of the tool's
+        /// profile over a random piecewise-linear face: never below it
+        /// (the tool would cut the face), and above it only by the
+        /// sampling's own error.
+        #[test]
+        fn reach_needed_is_the_profiles_largest_overlap(
+            steps in prop::collection::vec(0.05f64..1.0, 1..6),
+            offsets in prop::collection::vec(-2.0f64..2.0, 6),
+            tip_frac in 0.0f64..1.0,
+            d in 2.0f64..25.0,
+            rc_frac in 0.0f64..1.0,
+        ) {
+            let mut heights = vec![10.0];
+            for s in &steps {
+                heights.push(heights.last().unwrap() + s);
+            }
+            let n = heights.len();
+            let offsets: Vec<f64> = offsets.into_iter().take(n).collect();
+            prop_assume!(offsets.len() == n);
+            let s = EdgeSlopes { heights: heights.clone(), side: Vec::new(), holes: Vec::new() };
+            let tool = bull_nose(d, rc_frac * d / 2.0);
+            let tip = heights[0] + tip_frac * (heights[n - 1] - heights[0]);
+            let got = reach_needed(&s, &offsets, tip, &tool);
+            let span = (heights[n - 1] - tip).max(0.0) + tool.corner_radius + 1.0;
+            let dense = (0..=200_000)
+                .map(|i| {
+                    let h = span * i as f64 / 200_000.0;
+                    section_radius(&tool, h) - s.beyond(&offsets, tip + h)
+                })
+                .fold(f64::NEG_INFINITY, f64::max);
+            prop_assert!(got >= dense - 1e-9, "{got} < {dense}");
+            prop_assert!(got <= dense + 2e-3, "{got} > {dense}");
+        }
+    }
+}

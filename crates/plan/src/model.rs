@@ -549,3 +549,33 @@ impl Plan {
         self.refusals.retain(|r| r.stage < stage);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sloped_face_is_linear_between_samples_and_vertical_beyond() {
+        let s = EdgeSlopes {
+            heights: vec![1.0, 1.5, 2.0, 3.0],
+            side: Vec::new(),
+            holes: Vec::new(),
+        };
+        let o = [-0.5, 0.0, 0.5, 2.5];
+        let cases = [
+            (0.0, -0.5),
+            (1.0, -0.5),
+            (1.25, -0.25),
+            (1.5, 0.0),
+            (1.75, 0.25),
+            (2.5, 1.5),
+            (3.0, 2.5),
+            (9.0, 2.5),
+        ];
+        for (z, want) in cases {
+            assert!((s.beyond(&o, z) - want).abs() < 1e-12, "z {z}");
+        }
+        // An edge without offsets (not product, or a vertical face).
+        assert_eq!(s.beyond(&[], 1.2), 0.0);
+    }
+}

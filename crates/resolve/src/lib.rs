@@ -962,7 +962,12 @@ fn slabs(
                 .map(|s| sh.along_face * s.2)
                 .fold(sloped_max, f64::min)
                 .max(sh.min_thickness);
-            let n = ((b - z) / t - 1e-9).ceil().max(1.0);
+            // Never thinner than the minimum (a short band may then be up
+            // to twice the local thickness).
+            let n = ((b - z) / t - 1e-9)
+                .ceil()
+                .min(((b - z) / sh.min_thickness + 1e-9).floor())
+                .max(1.0);
             let next = if n <= 1.0 { b } else { z + (b - z) / n };
             out.push((z, next, true));
             z = next;

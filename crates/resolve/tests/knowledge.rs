@@ -92,6 +92,29 @@ fn an_unknown_block_a_missing_field_and_bad_numbers_are_refused() {
         e.contains("sloped_slab_thickness") && e.contains("remaining_owners"),
         "{e}"
     );
+
+    // Shallow slabs: a contact spacing that is not positive, a minimum
+    // above the largest thickness.
+    let d = copy_knowledge("shallow");
+    edit(
+        &d,
+        "shallow_slabs: Some((along_face: 0.7, min_thickness: 0.05))",
+        "shallow_slabs: Some((along_face: 0.0, min_thickness: 0.6))",
+    );
+    let e = errors(&d);
+    assert!(
+        e.contains("shallow_slabs.along_face") && e.contains("shallow_slabs.min_thickness"),
+        "{e}"
+    );
+    // Left out: every sloped slab is `sloped_slab_thickness` (older files).
+    let d = copy_knowledge("no-shallow");
+    edit(
+        &d,
+        "shallow_slabs: Some((along_face: 0.7, min_thickness: 0.05)),",
+        "",
+    );
+    let k = Knowledge::load_dir(&d).expect("loads without it");
+    assert!(k.interference.shallow_slabs.is_none());
 }
 
 /// Volume of the features of stage-5 rule `large` (1: large steps, 0: small).

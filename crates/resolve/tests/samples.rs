@@ -279,3 +279,144 @@ fn a_feature_on_top_of_another_comes_first() {
         }
     }
 }
+
+/// The sloped faces stage 6 records (`MachiningFeature::slopes`), checked
+/// against the part's mesh by ray casting: at every sampled height inside
+/// the part, just short of the recorded offset beyond a product edge's
+/// midpoint is no product and just past it is. The chamfer's offsets are
+/// those of a 45° plane; every sloped feature samples the face at least a
+/// corner radius (em20: 1 mm) above its top, or past the part's top.
+#[test]
+fn recorded_sloped_faces_lie_where_the_part_is() {
+    for name in ["chamfered_rib", "flange_cutouts"] {
+        let s = planned(name);
+        let mesh = thinplan_brep::tessellate(&s.brep, &s.brep.mass_tolerance());
+        let top = mesh
+            .positions
+            .iter()
+            .map(|p| p.dot(s.plan.setup.up.normalize()))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let mut checked = 0;
+        let sloped: Vec<&MachiningFeature> = s
+            .plan
+            .machining_features
+            .iter()
+            .filter(|f| f.slopes.is_some())
+            .collect();
+        assert!(!sloped.is_empty(), "{name}: no sloped feature");
+        for f in sloped {
+            let sl = f.slopes.as_ref().unwrap();
+            let h = &sl.heights;
+            assert!(h.windows(2).all(|w| w[0] < w[1]), "{name} {}: {h:?}", f.id);
+            assert!((h[0] - f.shape.z_min).abs() < 1e-9);
+            assert!(
+                h.contains(&f.shape.z_max)
+                    && (*h.last().unwrap() >= f.shape.z_max + 1.0 - 1e-9
+                        || *h.last().unwrap() > top),
+                "{name} {}: sampled up to {:?}, top {}",
+                f.id,
+                h.last(),
+                f.shape.z_max
+            );
+            let fr = &f.shape.frame;
+            let y = fr.z.cross(fr.x);
+            let outer = pts(&f.shape.region.outer);
+            let n = outer.len();
+            for (i, offs) in sl.side.iter().enumerate() {
+                if offs.is_empty() {
+                    continue;
+                }
+                assert_eq!(f.side_adjacency[i], Adjacency::Product);
+                assert_eq!(offs.len(), h.len());
+                let (a, b) = (outer[i], outer[(i + 1) % n]);
+                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                let len = (dx * dx + dy * dy).sqrt();
+                let nrm = [dy / len, -dx / len];
+                let mid = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+                for (k, (&z, &o)) in h.iter().zip(offs).enumerate() {
+                    // The region's own section (offset 0) and heights
+                    // above the part (nothing there) say nothing here.
+                    if k == 1 || z >= top - 1e-6 {
+                        continue;
+                    }
+                    let z = if k == 0 { z + 1e-3 } else { z - 1e-3 };
+                    let at = |t: f64| {
+                        fr.origin
+                            + fr.x * (mid[0] + nrm[0] * t)
+                            + y * (mid[1] + nrm[1] * t)
+                            + fr.z * z
+                    };
+                    // Slopes up to 10 (a round bottom): 1e-3 in height is
+                    // 0.01 across.
+                    let tol = 0.02;
+                    assert!(
+                        !in_part(&mesh, at(o - tol)),
+                        "{name} {} edge {i}: product short of offset {o} at z {z}",
+                        f.id
+                    );
+                    assert!(
+                        in_part(&mesh, at(o + tol)),
+                        "{name} {} edge {i}: no product past offset {o} at z {z}",
+                        f.id
+                    );
+                    if name == "chamfered_rib" {
+                        // The 45° chamfer: the face recedes as fast as it rises.
+                        let at_z = h[1];
+                        assert!(
+                            (o - (z - at_z)).abs() < 2e-3,
+                            "{} edge {i}: offset {o} at z {z}, section at {at_z}",
+                            f.id
+                        );
+                    }
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 20, "{name}: {checked} samples checked");
+    }
+}
+
+/// Shallow faces thin their slabs (`interference.shallow_slabs`): the
+/// cut-outs' round bottoms (R8) are sliced thinner near their lowest point
+/// than up their sides, never below the knowledge's minimum nor above its
+/// largest thickness, and each slab no thicker than `along_face · sin α`
+/// allows for the arc's slope at its top (the arc is steeper higher up).
+#[test]
+fn shallow_faces_get_thinner_slabs() {
+    let s = planned("flange_cutouts");
+    let kn = &s.knowledge.interference;
+    let sh = kn
+        .shallow_slabs
+        .as_ref()
+        .expect("shallow slabs in the knowledge");
+    // The first cut-out: x 42..58, its arc's centre at z 33, radius 8.
+    let mut slabs: Vec<(f64, f64)> = s
+        .plan
+        .machining_features
+        .iter()
+        .filter(|f| f.slopes.is_some())
+        .filter(|f| {
+            let b = f.plan_box();
+            b[0] >= 41.0 && b[2] <= 59.0
+        })
+        .map(|f| (f.shape.z_min, f.shape.z_max))
+        .collect();
+    slabs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    assert!(slabs.len() >= 10, "{slabs:?}");
+    let (lowest, highest) = (slabs[0], slabs[slabs.len() - 1]);
+    assert!(
+        lowest.1 - lowest.0 < 0.5 * (highest.1 - highest.0),
+        "{slabs:?}"
+    );
+    for &(a, b) in &slabs {
+        let t = b - a;
+        assert!(
+            t >= sh.min_thickness - 1e-9 && t <= kn.sloped_slab_thickness + 1e-9,
+            "{slabs:?}"
+        );
+        // Slope of the arc at the slab's top: sin α = u / 8, u the half-width.
+        let u = (64.0 - (33.0 - b).powi(2)).max(0.0).sqrt();
+        let allowed = (sh.along_face * u / 8.0).clamp(sh.min_thickness, kn.sloped_slab_thickness);
+        assert!(t <= allowed + 1e-6, "slab {a}..{b}: {t} > {allowed}");
+    }
+}
