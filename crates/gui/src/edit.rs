@@ -444,6 +444,9 @@ fn with_region(f: &MachiningFeature, region: Region, cut: Adjacency) -> Machinin
     g.shape.region = region;
     g.side_adjacency = side;
     g.hole_adjacency = holes;
+    // The sampled sloped faces belong to the old edges: the edited feature
+    // is planned as if its faces were vertical.
+    g.slopes = None;
     g
 }
 
@@ -627,6 +630,8 @@ pub fn merge(
         let mut m = fa.clone();
         m.shape.z_min = sa.z_min.min(sb.z_min);
         m.shape.z_max = sa.z_max.max(sb.z_max);
+        // Sampled for one slab's edges: planned as vertical once merged.
+        m.slopes = None;
         if sb.z_min < sa.z_min {
             m.bottom_adjacency = fb.bottom_adjacency;
         }
@@ -694,6 +699,7 @@ pub fn merge(
             sources.push((h, adj.as_slice()));
         }
         let mut m = fa.clone();
+        m.slopes = None;
         m.side_adjacency = adjacency_of_edges(&region.outer, &sources, Adjacency::Open);
         m.hole_adjacency = region
             .holes

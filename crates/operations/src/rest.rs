@@ -154,7 +154,67 @@ pub(crate) fn reached_from_beside(
         g.hole_adjacency.push(classify(&h));
         g.shape.region.holes.push(ProfileLoop::polygon(&h));
     }
+    g.slopes = carried_slopes(f, &g);
     Some(g)
+}
+
+/// The sampled sloped faces of `f` carried to the edges of `g` that lie on
+/// one of `f`'s product edges (the rest: vertical, nothing sampled).
+fn carried_slopes(f: &MachiningFeature, g: &MachiningFeature) -> Option<thinplan_plan::EdgeSlopes> {
+    let s = f.slopes.as_ref()?;
+    let loops_of = |m: &MachiningFeature| -> Vec<Vec<DVec2>> {
+        std::iter::once(&m.shape.region.outer)
+            .chain(&m.shape.region.holes)
+            .map(|l| l.vertices.iter().map(|v| DVec2::new(v.x, v.y)).collect())
+            .collect()
+    };
+    let old = loops_of(f);
+    let old_offsets: Vec<&Vec<Vec<f64>>> = std::iter::once(&s.side).chain(&s.holes).collect();
+    let on = |p: DVec2, a: DVec2, b: DVec2| crate::geom::dist_point_seg(p, a, b) < 1e-6;
+    let find = |a: DVec2, b: DVec2| -> Vec<f64> {
+        for (k, l) in old.iter().enumerate() {
+            let n = l.len();
+            for i in 0..n {
+                let (p, q) = (l[i], l[(i + 1) % n]);
+                if on(a, p, q) && on(b, p, q) {
+                    return old_offsets
+                        .get(k)
+                        .and_then(|o| o.get(i))
+                        .cloned()
+                        .unwrap_or_default();
+                }
+            }
+        }
+        Vec::new()
+    };
+    let per_loop = |l: &Vec<DVec2>, adj: &[Adjacency]| -> Vec<Vec<f64>> {
+        let n = l.len();
+        (0..n)
+            .map(|i| {
+                if adj.get(i) == Some(&Adjacency::Product) {
+                    find(l[i], l[(i + 1) % n])
+                } else {
+                    Vec::new()
+                }
+            })
+            .collect()
+    };
+    let new = loops_of(g);
+    let side = per_loop(&new[0], &g.side_adjacency);
+    let holes: Vec<Vec<Vec<f64>>> = new[1..]
+        .iter()
+        .zip(&g.hole_adjacency)
+        .map(|(l, a)| per_loop(l, a))
+        .collect();
+    let any = side
+        .iter()
+        .chain(holes.iter().flatten())
+        .any(|o| !o.is_empty());
+    any.then(|| thinplan_plan::EdgeSlopes {
+        heights: s.heights.clone(),
+        side,
+        holes,
+    })
 }
 
 #[cfg(test)]
@@ -277,5 +337,44 @@ mod tests {
         closed.side_adjacency = vec![Adjacency::Feature; 4];
         let (_, _, removed) = corner();
         assert!(reached_from_beside(&closed, &free, &removed, 12.0).is_none());
+    }
+
+    /// Sampled slopes stay with the edges that lie within one of the old
+    /// product edges (an edge split in two keeps them on both halves); a
+    /// wall that grows past its old edge is planned as vertical (nothing
+    /// was sampled there).
+    #[test]
+    fn sloped_faces_stay_only_on_the_edges_they_were_sampled_on() {
+        let (mut f, free, removed) = corner();
+        let offsets = vec![-0.5, 0.0, 0.5];
+        f.slopes = Some(EdgeSlopes {
+            heights: vec![0.0, 5.0, 10.0],
+            side: vec![offsets.clone(), vec![], vec![], vec![]],
+            holes: vec![],
+        });
+        let mut g = f.clone();
+        let v = |x: f64, y: f64| ProfileVertex { x, y, bulge: 0.0 };
+        g.shape.region.outer.vertices = vec![
+            v(0.0, 0.0),
+            v(2.0, 0.0),
+            v(4.0, 0.0),
+            v(4.0, 4.0),
+            v(0.0, 4.0),
+        ];
+        g.side_adjacency = vec![
+            Adjacency::Product,
+            Adjacency::Product,
+            Adjacency::Open,
+            Adjacency::Open,
+            Adjacency::Product,
+        ];
+        let s = carried_slopes(&f, &g).expect("carried");
+        assert_eq!(
+            s.side,
+            vec![offsets.clone(), offsets, vec![], vec![], vec![]]
+        );
+        // Grown along both walls past their old edges.
+        let grown = reached_from_beside(&f, &free, &removed, 12.0).expect("it grows");
+        assert!(grown.slopes.is_none());
     }
 }
