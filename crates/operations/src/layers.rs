@@ -2816,22 +2816,9 @@ fn check(
 mod tests {
     use super::*;
     use proptest::prelude::*;
-    use thinplan_knowledge::ToolKind;
 
     fn bull_nose(d: f64, rc: f64) -> Tool {
-        Tool {
-            id: "t".into(),
-            kind: ToolKind::BullNoseEndMill,
-            diameter: d,
-            corner_radius: rc,
-            flutes: 3,
-            flute_length: 30.0,
-            stickout: 60.0,
-            shank_diameter: d,
-            holder_diameter: 50.0,
-            holder_length: 60.0,
-            max_slot_depth_ratio: 0.5,
-        }
+        crate::test_tool(d, rc)
     }
 
     /// A 45° chamfer sampled as stage 6 does (section at `at`, slabs 0.5

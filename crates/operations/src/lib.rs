@@ -640,6 +640,24 @@ pub fn summaries(plan: &Plan) -> BTreeMap<OperationId, OperationSummary> {
     plan.operations.iter().map(|o| (o.id, summary(o))).collect()
 }
 
+/// A bull-nose end mill for unit tests (flutes 100 mm, holder Ø40).
+#[cfg(test)]
+pub(crate) fn test_tool(d: f64, rc: f64) -> thinplan_knowledge::Tool {
+    thinplan_knowledge::Tool {
+        id: "t".into(),
+        kind: thinplan_knowledge::ToolKind::BullNoseEndMill,
+        diameter: d,
+        corner_radius: rc,
+        flutes: 3,
+        flute_length: 100.0,
+        stickout: 120.0,
+        shank_diameter: d,
+        holder_diameter: 40.0,
+        holder_length: 50.0,
+        max_slot_depth_ratio: 0.5,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -621,22 +621,9 @@ fn lower_inside(
 mod tests {
     use super::*;
     use proptest::prelude::*;
-    use thinplan_knowledge::ToolKind;
 
     fn tool(d: f64, rc: f64) -> Tool {
-        Tool {
-            id: "t".into(),
-            kind: ToolKind::BullNoseEndMill,
-            diameter: d,
-            corner_radius: rc,
-            flutes: 3,
-            flute_length: 100.0,
-            stickout: 120.0,
-            shank_diameter: d,
-            holder_diameter: 40.0,
-            holder_length: 50.0,
-            max_slot_depth_ratio: 0.5,
-        }
+        crate::test_tool(d, rc)
     }
 
     /// Height of a bull-nose tool's lower surface above its tip at
