@@ -378,7 +378,7 @@ fn reach_needed(s: &EdgeSlopes, offsets: &[f64], tip: f64, tool: &Tool) -> f64 {
 /// `tool`: r less the reach it needs there (0 for vertical faces and
 /// non-product edges). `None` where nothing moves.
 fn slope_shifts(f: &MachiningFeature, tool: &Tool) -> Option<Vec<Vec<f64>>> {
-    let s = f.slopes.as_ref()?;
+    let s = f.slopes.as_ref().filter(|s| s.unusable().is_none())?;
     let r = tool.diameter / 2.0;
     let per = |o: &Vec<f64>| -> f64 {
         if o.is_empty() {
@@ -445,7 +445,7 @@ fn slope_check(
     tool: &Tool,
     plain: &[(Vec<Edge2>, Vec<Adjacency>)],
 ) -> Vec<(f64, Vec<Edge2>)> {
-    let Some(s) = f.slopes.as_ref() else {
+    let Some(s) = f.slopes.as_ref().filter(|s| s.unusable().is_none()) else {
         return Vec::new();
     };
     let tip = f.shape.z_min;
@@ -1485,6 +1485,15 @@ fn plan_band(
 ) -> Result<Made, String> {
     if f.slopes.is_none() || env.k.methods.sloped_faces == SlopedFaces::AsVertical {
         return plan_band_with(f, env, free, removed, false);
+    }
+    if let Some(why) = f.slopes.as_ref().and_then(|s| s.unusable()) {
+        let mut m = plan_band_with(f, env, free, removed, false)?;
+        m.warnings.push(format!(
+            "{}: its sampled sloped faces cannot be used ({why}); planned as vertical, \
+             material stays on them",
+            f.id
+        ));
+        return Ok(m);
     }
     // Sloped product faces: followed where the safety net holds, else
     // planned as vertical at the region's section (material stays, none

@@ -435,3 +435,84 @@ fn a_narrow_open_strip_is_cleared_by_one_line_down_its_middle() {
     assert!(lines >= 1);
     check_product_and_floor(&f, &ops, &k);
 }
+
+/// A drafted wall (issue 5, sloped faces): the step's product wall (y = 30)
+/// leans into the step at its bottom — the face lies `(z − 10)·0.05` beyond
+/// the region's edge. Followed, every cutting tool centre at the bottom
+/// level keeps the distance the tool's profile needs from that face (the
+/// largest section radius less the face's offset over the profile's
+/// heights, sampled densely here), which is more than r; samples a
+/// hand-edited plan spoils are refused with the reason, and the step is
+/// then planned as if the wall were vertical.
+#[test]
+fn a_drafted_wall_keeps_the_tool_off_its_foot() {
+    let slopes = |heights: Vec<f64>| thinplan_plan::EdgeSlopes {
+        side: vec![
+            Vec::new(),
+            Vec::new(),
+            heights.iter().map(|z| (z - 10.0) * 0.05).collect(),
+            Vec::new(),
+        ],
+        heights,
+        holes: Vec::new(),
+    };
+    let mut f = step(1);
+    f.slopes = Some(slopes(vec![0.0, 10.0, 20.0]));
+    let (_, ops, k) = run(f.clone());
+    let tool = k
+        .tool_sets
+        .values()
+        .flat_map(|s| &s.tools)
+        .find(|t| t.id == ops.operations[0].tool)
+        .unwrap()
+        .clone();
+    let (r, rc) = (tool.diameter / 2.0, tool.corner_radius);
+    let need = (0..=100_000)
+        .map(|i| {
+            let h = 25.0 * i as f64 / 100_000.0;
+            let rho = if h >= rc {
+                r
+            } else {
+                r - rc + (rc * rc - (rc - h) * (rc - h)).sqrt()
+            };
+            rho - (h.min(20.0) - 10.0) * 0.05
+        })
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(need > r + 0.4, "{need}");
+    let mut nearest = f64::INFINITY;
+    for op in &ops.operations {
+        let shift = op.provenance.values["slope_shift_mm"];
+        assert!((shift - (r - need)).abs() < 1e-3, "{shift} vs {}", r - need);
+        for m in &op.moves {
+            if m.region != Region3::Rapid && m.to.z < 1e-6 {
+                nearest = nearest.min(30.0 - m.to.y);
+            }
+        }
+    }
+    assert!(nearest >= need - 1e-6, "{nearest} < {need}");
+    assert!(
+        nearest < need + 0.05,
+        "the boundary pass runs at it: {nearest}"
+    );
+
+    // Spoilt samples: heights not ascending.
+    f.slopes = Some(slopes(vec![0.0, 20.0, 10.0]));
+    let (_, spoilt, _) = run(f.clone());
+    assert!(
+        spoilt
+            .warnings
+            .iter()
+            .any(|w| w.contains("MF1") && w.contains("cannot be used")),
+        "{:?}",
+        spoilt.warnings
+    );
+    f.slopes = None;
+    let (_, vertical, _) = run(f);
+    let moves = |o: &Operations| -> Vec<String> {
+        o.operations
+            .iter()
+            .map(|op| format!("{:?}", op.moves))
+            .collect()
+    };
+    assert_eq!(moves(&spoilt), moves(&vertical));
+}

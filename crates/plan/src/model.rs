@@ -379,6 +379,27 @@ pub struct EdgeSlopes {
 }
 
 impl EdgeSlopes {
+    /// Why the samples cannot be used (a hand-edited plan file): heights
+    /// not finite and strictly ascending, or an edge's offsets not one
+    /// finite number per height. `None` when they can.
+    pub fn unusable(&self) -> Option<String> {
+        let h = &self.heights;
+        if h.is_empty() || h.iter().any(|z| !z.is_finite()) || h.windows(2).any(|w| w[0] >= w[1]) {
+            return Some(format!(
+                "heights {h:?} are not finite and strictly ascending"
+            ));
+        }
+        let all = self.side.iter().chain(self.holes.iter().flatten());
+        for (i, o) in all.enumerate() {
+            if !o.is_empty() && (o.len() != h.len() || o.iter().any(|v| !v.is_finite())) {
+                return Some(format!(
+                    "edge {i}'s offsets {o:?} are not one finite number per height"
+                ));
+            }
+        }
+        None
+    }
+
     /// How far the face beyond an edge with `offsets` lies beyond it at
     /// height `z` (mm; see the type). 0 for an edge with none.
     pub fn beyond(&self, offsets: &[f64], z: f64) -> f64 {
@@ -577,5 +598,28 @@ mod tests {
         }
         // An edge without offsets (not product, or a vertical face).
         assert_eq!(s.beyond(&[], 1.2), 0.0);
+        assert_eq!(s.unusable(), None);
+    }
+
+    #[test]
+    fn hand_edited_samples_are_refused_with_the_reason() {
+        let ok = EdgeSlopes {
+            heights: vec![1.0, 2.0],
+            side: vec![vec![0.0, 0.5], Vec::new()],
+            holes: vec![vec![vec![-0.5, 0.0]]],
+        };
+        assert_eq!(ok.unusable(), None);
+        let mut bad = ok.clone();
+        bad.heights = vec![2.0, 1.0];
+        assert!(bad.unusable().unwrap().contains("ascending"));
+        let mut bad = ok.clone();
+        bad.heights = vec![1.0, f64::NAN];
+        assert!(bad.unusable().is_some());
+        let mut bad = ok.clone();
+        bad.side[0] = vec![0.0];
+        assert!(bad.unusable().unwrap().contains("edge 0"));
+        let mut bad = ok;
+        bad.holes[0][0][1] = f64::INFINITY;
+        assert!(bad.unusable().unwrap().contains("edge 2"));
     }
 }
