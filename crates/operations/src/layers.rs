@@ -91,6 +91,16 @@ const EPS: f64 = 1e-6;
 /// net's sample heights is smaller still.
 const EPS_SLOPE: f64 = 1e-5;
 
+/// Extra radius of every swept cut (mm): the passes built along the cut
+/// region come up to about 1.2e-4 nearer than its boundary (the booleans'
+/// intersections, the passes' joins), and the safety net allows only
+/// `EPS_SLOPE`.
+const SWEPT_MARGIN: f64 = 1e-3;
+
+/// How clearly a swept cut crosses the relaxed region's boundary where the
+/// two would run along each other (mm, `swept_cuts`).
+const TOUCH: f64 = 2e-3;
+
 /// The geometry of a feature for one tool.
 struct Geometry {
     r: f64,
@@ -99,20 +109,27 @@ struct Geometry {
     centre_polys: Vec<Vec<DVec2>>,
     /// The feature region itself, sampled.
     region_polys: Vec<Vec<DVec2>>,
+    /// Product edges the tool's radius is measured from: which stretches
+    /// of the region run along product, bands, entries. With `Swept`,
+    /// where one shift per edge put them (conservative at the edges' ends,
+    /// where the swept region reaches further).
     product: Vec<Edge2>,
+    /// Product edges the region was offset from, which the safety net
+    /// holds every tool centre `r` away from (`product` but with `Swept`).
+    product_offset: Vec<Edge2>,
     /// Boundaries of the free space around the feature (other product the
     /// tool must keep r from, see `free.rs`).
     keep_out: Vec<Edge2>,
     /// The region was clipped to the free space (straight edges only).
     clipped: bool,
-    /// Sloped product faces (`MachiningFeature::slopes`) were followed:
-    /// the product edges above are moved to where the tool's profile
-    /// touches the face.
-    sloped: bool,
+    /// How sloped product faces (`MachiningFeature::slopes`) were
+    /// followed: the product edges above are moved to where the tool's
+    /// profile touches the face.
+    slopes: Slopes,
     /// The product's edges at heights over the tool's profile, each with
     /// the tool's section radius there: the safety net for sloped faces
     /// (every tool centre at least that far from them). Empty when not
-    /// `sloped`.
+    /// `Slopes::AsVertical`.
     slope_check: Vec<(f64, Vec<Edge2>)>,
 }
 
@@ -158,13 +175,27 @@ fn smallest_product_corner(edges: &[(Vec<Edge2>, Vec<Adjacency>)]) -> Option<f64
     best
 }
 
+/// How a feature's sampled sloped faces shape its tool-centre region.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Slopes {
+    /// Product edges stay where the region's section has them.
+    AsVertical,
+    /// Each product edge moves by one distance: exact along the edge,
+    /// conservative around its ends.
+    Shifted,
+    /// Each product edge moves as far as the tool's full radius allows,
+    /// and the product at every height of the corner radius is cut from
+    /// the region (`caps`): exact at the edges' ends too.
+    Swept,
+}
+
 fn geometry(
     f: &MachiningFeature,
     m: &Method,
     tool: &Tool,
     free: Option<&crate::free::Shapes>,
     removed: Option<&crate::free::Shapes>,
-    slopes: bool,
+    slopes: Slopes,
 ) -> Option<Geometry> {
     use i_overlay::core::fill_rule::FillRule;
     use i_overlay::core::overlay_rule::OverlayRule;
@@ -174,7 +205,14 @@ fn geometry(
     let plain = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
     // Sloped product faces: the product edges move to where the tool's
     // profile touches the face, and the space between is free.
-    let shifts = if slopes { slope_shifts(f, tool) } else { None };
+    let shifts = match slopes {
+        Slopes::AsVertical => None,
+        Slopes::Shifted => slope_shifts(f, tool),
+        Slopes::Swept => match relaxed_shifts(f, tool) {
+            Some(sh) => Some(sh),
+            None => return geometry(f, m, tool, free, removed, Slopes::Shifted),
+        },
+    };
     let (edges, free_sloped) = match &shifts {
         None => (plain.clone(), None),
         Some(sh) => {
@@ -304,7 +342,15 @@ fn geometry(
             }))
             .ok()
         })?;
-    let centre = Area::from_shape(centre);
+    let mut centre = Area::from_shape(centre);
+    if slopes == Slopes::Swept {
+        let cut = swept_cuts(f, tool, &plain, shifts.as_deref().unwrap_or_default())
+            .and_then(|cuts| crate::caps::subtract(&centre, &cuts));
+        match cut {
+            Some(c) => centre = c,
+            None => return geometry(f, m, tool, free, removed, Slopes::Shifted),
+        }
+    }
     if centre.is_empty() {
         return None;
     }
@@ -322,10 +368,29 @@ fn geometry(
         centre,
         centre_polys,
         region_polys,
-        product,
+        product_offset: product.clone(),
+        product: match (slopes, &shifts) {
+            (Slopes::Swept, Some(_)) => {
+                let sh = slope_shifts(f, tool).unwrap_or_default();
+                moved_edges(&plain, &sh)
+                    .into_iter()
+                    .flat_map(|(es, adj)| {
+                        es.into_iter()
+                            .zip(adj)
+                            .filter(|(_, a)| *a == Adjacency::Product)
+                            .map(|(e, _)| e)
+                    })
+                    .collect()
+            }
+            _ => product,
+        },
         keep_out,
         clipped: clip.is_some(),
-        sloped: shifts.is_some(),
+        slopes: if shifts.is_some() {
+            slopes
+        } else {
+            Slopes::AsVertical
+        },
         slope_check: match shifts {
             Some(_) => slope_check(f, tool, &plain),
             None => Vec::new(),
@@ -397,6 +462,169 @@ fn slope_shifts(f: &MachiningFeature, tool: &Tool) -> Option<Vec<Vec<f64>>> {
     v.iter().flatten().any(|x| *x != 0.0).then_some(v)
 }
 
+/// How far each edge of the feature's loops can move towards the product
+/// for `tool` when the product at the corner radius's heights is cut from
+/// the region on its own (`swept_cuts`): to the face where the tool is at
+/// its full radius, the nearest over those heights. Never less than
+/// `slope_shifts`. `None` where nothing moves.
+fn relaxed_shifts(f: &MachiningFeature, tool: &Tool) -> Option<Vec<Vec<f64>>> {
+    let s = f.slopes.as_ref().filter(|s| s.unusable().is_none())?;
+    let rc = tool.corner_radius.clamp(0.0, tool.diameter / 2.0);
+    let full = f.shape.z_min + rc;
+    let per = |o: &Vec<f64>| -> f64 {
+        if o.is_empty() {
+            return 0.0;
+        }
+        // `beyond` is piecewise linear and constant past its samples.
+        let v = s
+            .heights
+            .iter()
+            .filter(|z| **z > full)
+            .map(|z| s.beyond(o, *z))
+            .fold(s.beyond(o, full), f64::min);
+        if v.abs() < 1e-9 {
+            0.0
+        } else {
+            v
+        }
+    };
+    let mut v: Vec<Vec<f64>> = vec![s.side.iter().map(per).collect()];
+    v.extend(s.holes.iter().map(|h| h.iter().map(per).collect()));
+    v.iter().flatten().any(|x| *x != 0.0).then_some(v)
+}
+
+/// What the region moved by `relaxed` (`relaxed_shifts`) must lose so that
+/// no height of the tool's corner radius comes nearer the product than its
+/// section radius: per pair of neighbouring heights and product edge, the
+/// convex hull of the edge's end discs at both (`caps`). Above the corner
+/// radius the relaxed region already keeps the full radius from the
+/// product. `None` where the edges do not pair up between heights or a
+/// product edge is an arc (the caller keeps one shift per edge).
+fn swept_cuts(
+    f: &MachiningFeature,
+    tool: &Tool,
+    plain: &[(Vec<Edge2>, Vec<Adjacency>)],
+    relaxed: &[Vec<f64>],
+) -> Option<Vec<cavalier_contours::polyline::Polyline<f64>>> {
+    let s = f.slopes.as_ref().filter(|s| s.unusable().is_none())?;
+    let tip = f.shape.z_min;
+    let rc = tool.corner_radius.clamp(0.0, tool.diameter / 2.0);
+    if rc <= 0.0 {
+        return Some(Vec::new());
+    }
+    const STEPS: usize = 32;
+    let mut hs: Vec<f64> = (0..=STEPS)
+        .map(|k| rc * (1.0 - (k as f64 * std::f64::consts::FRAC_PI_2 / STEPS as f64).cos()))
+        .collect();
+    hs.extend(
+        s.heights
+            .iter()
+            .map(|z| z - tip)
+            .filter(|h| *h > 0.0 && *h < rc),
+    );
+    hs.sort_by(f64::total_cmp);
+    hs.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    let offsets = |k: usize, i: usize| -> Option<&Vec<f64>> {
+        if k == 0 {
+            s.side.get(i)
+        } else {
+            s.holes.get(k - 1).and_then(|h| h.get(i))
+        }
+    };
+    let at = |out: Vec<Vec<f64>>| -> Vec<Vec<(Edge2, Adjacency, Option<usize>)>> {
+        moved_edges_keyed(plain, &out)
+    };
+    let outs = |h: f64| -> Vec<Vec<f64>> {
+        plain
+            .iter()
+            .enumerate()
+            .map(|(k, (es, _))| {
+                (0..es.len())
+                    .map(|i| offsets(k, i).map_or(0.0, |o| s.beyond(o, tip + h)))
+                    .collect()
+            })
+            .collect()
+    };
+    let base = at(relaxed.to_vec());
+    let same = |a: &Edge2, b: &Edge2| {
+        a.a.distance_squared(b.a) < 1e-18 && a.b.distance_squared(b.b) < 1e-18
+    };
+    let mut cuts = Vec::new();
+    let mut prev = at(outs(hs[0]));
+    for w in hs.windows(2) {
+        let next = at(outs(w[1]));
+        // A disc all but as large as the full radius would run a hair
+        // inside the relaxed region's boundary, along it: the polyline
+        // booleans fail on such near-coincident edges, so it is made to
+        // cross clearly (a thousandth of a millimetre more room is lost).
+        let full = tool.diameter / 2.0;
+        let grown = |r: f64| {
+            let r = r + SWEPT_MARGIN;
+            if r > full - TOUCH {
+                r.max(full + TOUCH)
+            } else {
+                r
+            }
+        };
+        // The discs' radius must run linearly between the two heights (as
+        // the edges move) and never below the section radius: the tangent
+        // to the (concave) profile at the upper height lies above it.
+        let (h0, h1) = (w[0], w[1]);
+        let top = section_radius(tool, h1);
+        let slope = if h1 < rc {
+            (rc - h1) / (rc * rc - (rc - h1) * (rc - h1)).max(1e-300).sqrt()
+        } else {
+            0.0
+        };
+        let low = (top - slope * (h1 - h0)).max(section_radius(tool, h0));
+        let radii = (grown(low), grown(top));
+        for (k, (l0, l1)) in prev.iter().zip(&next).enumerate() {
+            if l0.len() != l1.len() || l0.iter().zip(l1).any(|(a, b)| a.2 != b.2) {
+                return None;
+            }
+            for (e0, e1) in l0.iter().zip(l1) {
+                if e0.1 != Adjacency::Product {
+                    continue;
+                }
+                if e0.0.bulge != 0.0 || e1.0.bulge != 0.0 {
+                    return None;
+                }
+                // Where it stands as in the relaxed region, the full radius
+                // there keeps the smaller ones off already; so it does where
+                // all four discs lie within the full radius of one relaxed
+                // product edge (that capsule is convex, so their hull does).
+                let relaxed_edge = e0.2.and_then(|t| {
+                    base.get(k)
+                        .and_then(|l| l.iter().find(|b| b.2 == Some(t)))
+                        .map(|b| b.0)
+                });
+                if relaxed_edge.is_some_and(|b| same(&b, &e0.0) && same(&b, &e1.0)) {
+                    continue;
+                }
+                let discs = [(e0.0.a, low), (e0.0.b, low), (e1.0.a, top), (e1.0.b, top)];
+                let covered = base.iter().flatten().any(|(b, a, _)| {
+                    *a == Adjacency::Product
+                        && discs
+                            .iter()
+                            .all(|(c, rho)| b.distance(*c) + rho + SWEPT_MARGIN <= full)
+                });
+                if covered {
+                    continue;
+                }
+                let hull = crate::caps::disc_hull(&[
+                    (e0.0.a, radii.0),
+                    (e0.0.b, radii.0),
+                    (e1.0.a, radii.1),
+                    (e1.0.b, radii.1),
+                ])?;
+                cuts.push(hull);
+            }
+        }
+        prev = next;
+    }
+    Some(cuts)
+}
+
 /// The loops with each edge moved out by its own distance (`move_edges`),
 /// keeping each edge's adjacency (a join next to a product edge counts as
 /// product).
@@ -404,6 +632,18 @@ fn moved_edges(
     loops: &[(Vec<Edge2>, Vec<Adjacency>)],
     out: &[Vec<f64>],
 ) -> Vec<(Vec<Edge2>, Vec<Adjacency>)> {
+    moved_edges_keyed(loops, out)
+        .into_iter()
+        .map(|l| l.into_iter().map(|(e, a, _)| (e, a)).unzip())
+        .collect()
+}
+
+/// `moved_edges`, each edge with the index of the edge it moves (`None`
+/// for a join).
+fn moved_edges_keyed(
+    loops: &[(Vec<Edge2>, Vec<Adjacency>)],
+    out: &[Vec<f64>],
+) -> Vec<Vec<(Edge2, Adjacency, Option<usize>)>> {
     loops
         .iter()
         .enumerate()
@@ -430,9 +670,9 @@ fn moved_edges(
                             _ => Adjacency::Product,
                         },
                     };
-                    (e, a)
+                    (e, a, tag)
                 })
-                .unzip()
+                .collect()
         })
         .collect()
 }
@@ -1484,10 +1724,10 @@ fn plan_band(
     removed: Option<&crate::free::Shapes>,
 ) -> Result<Made, String> {
     if f.slopes.is_none() || env.k.methods.sloped_faces == SlopedFaces::AsVertical {
-        return plan_band_with(f, env, free, removed, false);
+        return plan_band_with(f, env, free, removed, Slopes::AsVertical);
     }
     if let Some(why) = f.slopes.as_ref().and_then(|s| s.unusable()) {
-        let mut m = plan_band_with(f, env, free, removed, false)?;
+        let mut m = plan_band_with(f, env, free, removed, Slopes::AsVertical)?;
         m.warnings.push(format!(
             "{}: its sampled sloped faces cannot be used ({why}); planned as vertical, \
              material stays on them",
@@ -1495,10 +1735,13 @@ fn plan_band(
         ));
         return Ok(m);
     }
-    // Sloped product faces: followed where the safety net holds, else
-    // planned as vertical at the region's section (material stays, none
-    // is cut beyond it), and said.
-    match plan_band_with(f, env, free, removed, true) {
+    // Sloped product faces: followed where the safety net holds (swept at
+    // the edges' ends, else one shift per edge), else planned as vertical
+    // at the region's section (material stays, none is cut beyond it),
+    // and said.
+    let followed = plan_band_with(f, env, free, removed, Slopes::Swept)
+        .or_else(|_| plan_band_with(f, env, free, removed, Slopes::Shifted));
+    match followed {
         Ok(mut m) => {
             // Provenance: how far the product edges moved for each tool.
             for op in &mut m.ops {
@@ -1517,7 +1760,7 @@ fn plan_band(
             Ok(m)
         }
         Err(e) => {
-            let mut m = plan_band_with(f, env, free, removed, false)?;
+            let mut m = plan_band_with(f, env, free, removed, Slopes::AsVertical)?;
             m.warnings.push(format!(
                 "{}: its sloped product faces cannot be followed ({e}); planned as vertical, \
                  material stays on them",
@@ -1533,7 +1776,7 @@ fn plan_band_with(
     env: &Env,
     free: Option<&crate::free::Shapes>,
     removed: Option<&crate::free::Shapes>,
-    slopes: bool,
+    slopes: Slopes,
 ) -> Result<Made, String> {
     let mk = &env.k.methods;
     let edges = adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
@@ -2260,7 +2503,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     // product is open, and the removed space is the whole free space.
     let Some((small, g2, own)) = cands
         .iter()
-        .find_map(|t| geometry(c.f, c.m, t, c.free, c.removed, c.g.sloped).map(|g| (*t, g, false)))
+        .find_map(|t| geometry(c.f, c.m, t, c.free, c.removed, c.g.slopes).map(|g| (*t, g, false)))
         .or_else(|| match rest {
             Rest::Wall(w) if w.run_last && cands.is_empty() => {
                 let mut f = c.f.clone();
@@ -2274,7 +2517,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
                     .iter_mut()
                     .flat_map(|h| h.iter_mut())
                     .for_each(open);
-                geometry(&f, c.m, main, c.free, c.free, c.g.sloped).map(|g| (main, g, true))
+                geometry(&f, c.m, main, c.free, c.free, c.g.slopes).map(|g| (main, g, true))
             }
             _ => None,
         })
@@ -2743,7 +2986,7 @@ fn check(
 ) -> Result<(), String> {
     // Only edges within r of a centre can fail it: bucketed once.
     let grids = (
-        crate::geom::EdgeGrid::new(&g.product, g.r),
+        crate::geom::EdgeGrid::new(&g.product_offset, g.r),
         crate::geom::EdgeGrid::new(&g.keep_out, g.r),
     );
     let slope_grids: Vec<crate::geom::EdgeGrid> = g
@@ -2794,13 +3037,13 @@ fn check(
                 if dist < rho - EPS_SLOPE {
                     return Err(format!(
                         "a move would touch a sloped product face: tool centre ({:.3}, {:.3}, \
-                         {:.3}) is {dist:.4} mm from it where the tool's section radius is \
-                         {rho:.3}",
+                         {:.3}) is {dist:.6} mm from it where the tool's section radius is \
+                         {rho:.6}",
                         p.x, p.y, p.z
                     ));
                 }
             }
-            let own = near(p.truncate(), &g.product, &grids.0);
+            let own = near(p.truncate(), &g.product_offset, &grids.0);
             let other = near(p.truncate(), &g.keep_out, &grids.1);
             let dist = own.min(other);
             if dist < g.r - EPS {
@@ -2902,5 +3145,160 @@ mod tests {
             prop_assert!(got >= dense - 1e-9, "{got} < {dense}");
             prop_assert!(got <= dense + 2e-3, "{got} > {dense}");
         }
+    }
+
+    /// A U-shaped cut-out's round bottom (R8) in a 2 mm flange: the slab's
+    /// region is the gap between the flange's two ends, the tool (wider
+    /// than the gap) reaches in from beside the flange and pivots about
+    /// the ends. Checked here against the flange itself, independently of
+    /// the plan's sampled faces: at 2000 heights over the tool's profile
+    /// every point of the swept centre region keeps the section radius from
+    /// both ends of the flange (rectangles whose gap narrows downward),
+    /// and the swept region holds the one-shift region and reaches further
+    /// in towards the flange.
+    #[test]
+    fn swept_region_pivots_about_a_thin_flange_and_stays_off_it() {
+        let k = thinplan_knowledge::Knowledge::builtin().unwrap();
+        let m = k
+            .methods
+            .for_feature(false, SidesMatch::PartiallyOpen)
+            .unwrap()
+            .clone();
+        let tool = bull_nose(20.0, 1.0);
+        let (cx, zc, rb) = (50.0, 33.0, 8.0);
+        let half = |z: f64| (rb * rb - (z.min(zc) - zc).powi(2)).max(0.0).sqrt();
+        let (z0, z1) = (25.5, 25.75);
+        let a = half(0.5 * (z0 + z1));
+        let v = |x: f64, y: f64| thinplan_plan::ProfileVertex { x, y, bulge: 0.0 };
+        let heights: Vec<f64> = (0..=60).map(|i| z0 + 0.05 * i as f64).collect();
+        let beyond: Vec<f64> = heights.iter().map(|z| half(*z) - a).collect();
+        let f = MachiningFeature {
+            id: thinplan_plan::MachiningFeatureId(1),
+            owner: thinplan_plan::StiffnessFeatureId(0),
+            shape: thinplan_plan::Prism {
+                frame: thinplan_plan::PrismFrame {
+                    origin: DVec3::ZERO,
+                    x: DVec3::X,
+                    z: DVec3::Z,
+                },
+                region: thinplan_plan::Region {
+                    outer: thinplan_plan::ProfileLoop {
+                        vertices: vec![
+                            v(cx - a, 0.0),
+                            v(cx + a, 0.0),
+                            v(cx + a, 2.0),
+                            v(cx - a, 2.0),
+                        ],
+                    },
+                    holes: Vec::new(),
+                },
+                z_min: z0,
+                z_max: z1,
+            },
+            side_adjacency: vec![
+                Adjacency::Open,
+                Adjacency::Product,
+                Adjacency::Open,
+                Adjacency::Product,
+            ],
+            hole_adjacency: Vec::new(),
+            bottom_adjacency: Adjacency::Open,
+            slopes: Some(EdgeSlopes {
+                heights,
+                side: vec![Vec::new(), beyond.clone(), Vec::new(), beyond],
+                holes: Vec::new(),
+            }),
+            provenance: Provenance::new(ProvenanceSource::Default, "test"),
+        };
+        // The free space at the slab's middle: a box less the flange.
+        let free: crate::free::Shapes = vec![vec![vec![
+            [30.0, -20.0],
+            [70.0, -20.0],
+            [70.0, 0.0],
+            [cx + a, 0.0],
+            [cx + a, 2.0],
+            [70.0, 2.0],
+            [70.0, 22.0],
+            [30.0, 22.0],
+            [30.0, 2.0],
+            [cx - a, 2.0],
+            [cx - a, 0.0],
+            [30.0, 0.0],
+        ]]];
+        let swept = geometry(&f, &m, &tool, Some(&free), Some(&free), Slopes::Swept).unwrap();
+        let shifted = geometry(&f, &m, &tool, Some(&free), Some(&free), Slopes::Shifted).unwrap();
+        assert_eq!(swept.slopes, Slopes::Swept);
+        assert_eq!(shifted.slopes, Slopes::Shifted);
+
+        // Distance from p to the flange at height z (two rectangles).
+        let flange = |p: DVec2, z: f64| -> f64 {
+            let g = half(z);
+            let dy = if p.y < 0.0 {
+                -p.y
+            } else if p.y > 2.0 {
+                p.y - 2.0
+            } else {
+                0.0
+            };
+            let dx = (p.x - cx).abs();
+            let dx = if dx >= g { 0.0 } else { g - dx };
+            dx.hypot(dy)
+        };
+        let r = 10.0;
+        let rc = 1.0;
+        let section = |h: f64| {
+            if h >= rc {
+                r
+            } else {
+                r - rc + (rc * rc - (rc - h) * (rc - h)).sqrt()
+            }
+        };
+        let mut pts: Vec<DVec2> = swept.centre_polys.iter().flatten().copied().collect();
+        let mut y = -12.0;
+        while y < 14.0 {
+            let mut x = 36.0;
+            while x < 64.0 {
+                let p = DVec2::new(x, y);
+                if inside(p, &swept.centre_polys) {
+                    pts.push(p);
+                }
+                x += 0.05;
+            }
+            y += 0.05;
+        }
+        assert!(pts.len() > 1000, "{}", pts.len());
+        let mut worst = f64::INFINITY;
+        for i in 0..=2000 {
+            let h = 3.0 * i as f64 / 2000.0;
+            let rho = section(h);
+            for p in &pts {
+                worst = worst.min(flange(*p, z0 + h) - rho);
+            }
+        }
+        assert!(
+            worst >= -1e-6,
+            "a tool centre is {worst} inside the flange's reach"
+        );
+        // The one-shift region lies within the swept one, which reaches
+        // further in beside the flange's ends.
+        for p in shifted.centre_polys.iter().flatten() {
+            assert!(
+                inside(*p, &swept.centre_polys)
+                    || boundary_distance(*p, &swept.centre_polys) < 1e-3,
+                "({}, {}) of the shifted region outside the swept one",
+                p.x,
+                p.y
+            );
+        }
+        let deepest = |g: &Geometry| {
+            g.centre_polys
+                .iter()
+                .flatten()
+                .filter(|p| (p.x - cx).abs() < 0.5 && p.y > 2.0)
+                .map(|p| p.y)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (ds, dh) = (deepest(&swept), deepest(&shifted));
+        assert!(ds < dh - 0.2, "swept reaches y {ds}, shifted {dh}");
     }
 }

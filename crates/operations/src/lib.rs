@@ -13,6 +13,7 @@
 //! times from `thinplan-feeds` under the machine's limits. [`order`] is
 //! stage 8.
 
+mod caps;
 mod free;
 pub mod geom;
 mod layers;
