@@ -26,7 +26,11 @@ use crate::geom::{oriented, Area};
 /// tangents. `None` for no disc, a radius that is not positive, or a hull
 /// the wrap cannot close (numerically degenerate input).
 pub(crate) fn disc_hull(discs: &[(DVec2, f64)]) -> Option<Polyline<f64>> {
-    if discs.is_empty() || discs.iter().any(|(c, r)| !r.is_finite() || *r <= 0.0 || !c.is_finite()) {
+    if discs.is_empty()
+        || discs
+            .iter()
+            .any(|(c, r)| !r.is_finite() || *r <= 0.0 || !c.is_finite())
+    {
         return None;
     }
     // Discs inside another one add nothing (of equal ones the first stays).

@@ -1771,6 +1771,21 @@ fn plan_band(
     }
 }
 
+/// Provenance of how sloped faces shaped the operation's region:
+/// `slope_ends_swept` 1 where the product was swept at every height of the
+/// corner radius (`Slopes::Swept`), 0 where each edge moved by one shift.
+fn slope_values(prov: &mut Provenance, g: &Geometry) {
+    match g.slopes {
+        Slopes::AsVertical => {}
+        Slopes::Shifted => {
+            prov.values.insert("slope_ends_swept".into(), 0.0);
+        }
+        Slopes::Swept => {
+            prov.values.insert("slope_ends_swept".into(), 1.0);
+        }
+    }
+}
+
 fn plan_band_with(
     f: &MachiningFeature,
     env: &Env,
@@ -2211,6 +2226,7 @@ fn plan_band_with(
             (z_top - z_main_bottom) / layer_count.max(1) as f64,
             layer_count,
         );
+        slope_values(&mut prov, &g);
         for (k, v) in &prov_values {
             prov.values.insert((*k).into(), *v);
         }
@@ -2294,6 +2310,7 @@ fn plan_band_with(
             let mut prov =
                 Provenance::new(ProvenanceSource::Knowledge, format!("{rule}.bottom_layer"));
             base_values(&mut prov, so, top - z_min, 1);
+            slope_values(&mut prov, &g);
             prov.note = bnotes.join("; ");
             check(&b, &g, z_min, z_top, f)?;
             ops.push(lop(b, prov));
@@ -2644,6 +2661,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
         ProvenanceSource::Knowledge,
         format!("methods.{}.{suffix}", c.m.id),
     );
+    slope_values(&mut prov, &g2);
     let v = &mut prov.values;
     v.insert("tool_diameter_mm".into(), d2);
     v.insert("tool_corner_radius_mm".into(), small.corner_radius);

@@ -484,7 +484,9 @@ fn a_drafted_wall_keeps_the_tool_off_its_foot() {
         let shift = op.provenance.values["slope_shift_mm"];
         assert!((shift - (r - need)).abs() < 1e-3, "{shift} vs {}", r - need);
         for m in &op.moves {
-            if m.region != Region3::Rapid && m.to.z < 1e-6 {
+            // Along the wall: past its ends (x < 0, x > 100) the tool may
+            // pivot about them, nearer the wall's line.
+            if m.region != Region3::Rapid && m.to.z < 1e-6 && (0.0..=100.0).contains(&m.to.x) {
                 nearest = nearest.min(30.0 - m.to.y);
             }
         }
