@@ -578,47 +578,74 @@ fn swept_cuts(
         };
         let low = (top - slope * (h1 - h0)).max(section_radius(tool, h0));
         let radii = (grown(low), grown(top));
+        // The product's segments at both heights, paired: the moved edges
+        // by the edge they move, and the joins between two of them (a join
+        // is there at one height and not at another where the two edges'
+        // distances part: its ends are the two edges' ends, which move
+        // linearly too).
+        let mut pairs: Vec<((Edge2, Edge2), Option<Edge2>)> = Vec::new();
         for (k, (l0, l1)) in prev.iter().zip(&next).enumerate() {
-            if l0.len() != l1.len() || l0.iter().zip(l1).any(|(a, b)| a.2 != b.2) {
+            let tagged =
+                |l: &Vec<(Edge2, Adjacency, Option<usize>)>| -> Vec<(Edge2, Adjacency, usize)> {
+                    l.iter()
+                        .filter_map(|(e, a, t)| t.map(|t| (*e, *a, t)))
+                        .collect()
+                };
+            let (t0, t1) = (tagged(l0), tagged(l1));
+            if t0.len() != t1.len() || t0.iter().zip(&t1).any(|(a, b)| a.2 != b.2) {
                 return None;
             }
-            for (e0, e1) in l0.iter().zip(l1) {
-                if e0.1 != Adjacency::Product {
-                    continue;
-                }
+            let n = t0.len();
+            for j in 0..n {
+                let (e0, e1) = (&t0[j], &t1[j]);
                 if e0.0.bulge != 0.0 || e1.0.bulge != 0.0 {
-                    return None;
-                }
-                // Where it stands as in the relaxed region, the full radius
-                // there keeps the smaller ones off already; so it does where
-                // all four discs lie within the full radius of one relaxed
-                // product edge (that capsule is convex, so their hull does).
-                let relaxed_edge = e0.2.and_then(|t| {
-                    base.get(k)
-                        .and_then(|l| l.iter().find(|b| b.2 == Some(t)))
-                        .map(|b| b.0)
-                });
-                if relaxed_edge.is_some_and(|b| same(&b, &e0.0) && same(&b, &e1.0)) {
+                    if e0.1 == Adjacency::Product {
+                        return None;
+                    }
                     continue;
                 }
-                let discs = [(e0.0.a, low), (e0.0.b, low), (e1.0.a, top), (e1.0.b, top)];
-                let covered = base.iter().flatten().any(|(b, a, _)| {
-                    *a == Adjacency::Product
-                        && discs
-                            .iter()
-                            .all(|(c, rho)| b.distance(*c) + rho + SWEPT_MARGIN <= full)
-                });
-                if covered {
-                    continue;
+                if e0.1 == Adjacency::Product {
+                    let relaxed_edge = base
+                        .get(k)
+                        .and_then(|l| l.iter().find(|b| b.2 == Some(e0.2)))
+                        .map(|b| b.0);
+                    pairs.push(((e0.0, e1.0), relaxed_edge));
                 }
-                let hull = crate::caps::disc_hull(&[
-                    (e0.0.a, radii.0),
-                    (e0.0.b, radii.0),
-                    (e1.0.a, radii.1),
-                    (e1.0.b, radii.1),
-                ])?;
-                cuts.push(hull);
+                let (f0, f1) = (&t0[(j + 1) % n], &t1[(j + 1) % n]);
+                let joined = |a: &Edge2, b: &Edge2| a.b.distance_squared(b.a) > 1e-18;
+                if (e0.1 == Adjacency::Product || f0.1 == Adjacency::Product)
+                    && (joined(&e0.0, &f0.0) || joined(&e1.0, &f1.0))
+                {
+                    let seg = |a: DVec2, b: DVec2| Edge2 { a, b, bulge: 0.0 };
+                    pairs.push(((seg(e0.0.b, f0.0.a), seg(e1.0.b, f1.0.a)), None));
+                }
             }
+        }
+        for ((e0, e1), relaxed_edge) in pairs {
+            // Where it stands as in the relaxed region, the full radius
+            // there keeps the smaller ones off already; so it does where
+            // all four discs lie within the full radius of one relaxed
+            // product edge (that capsule is convex, so their hull does).
+            if relaxed_edge.is_some_and(|b| same(&b, &e0) && same(&b, &e1)) {
+                continue;
+            }
+            let discs = [(e0.a, low), (e0.b, low), (e1.a, top), (e1.b, top)];
+            let covered = base.iter().flatten().any(|(b, a, _)| {
+                *a == Adjacency::Product
+                    && discs
+                        .iter()
+                        .all(|(c, rho)| b.distance(*c) + rho + SWEPT_MARGIN <= full)
+            });
+            if covered {
+                continue;
+            }
+            let hull = crate::caps::disc_hull(&[
+                (e0.a, radii.0),
+                (e0.b, radii.0),
+                (e1.a, radii.1),
+                (e1.b, radii.1),
+            ])?;
+            cuts.push(hull);
         }
         prev = next;
     }
@@ -3173,7 +3200,9 @@ mod tests {
     /// every point of the swept centre region keeps the section radius from
     /// both ends of the flange (rectangles whose gap narrows downward),
     /// and the swept region holds the one-shift region and reaches further
-    /// in towards the flange.
+    /// in towards the flange. Once more with one end's edge in two pieces
+    /// whose samples part, so their moved copies are joined at some heights
+    /// only.
     #[test]
     fn swept_region_pivots_about_a_thin_flange_and_stays_off_it() {
         let k = thinplan_knowledge::Knowledge::builtin().unwrap();
@@ -3190,133 +3219,176 @@ mod tests {
         let v = |x: f64, y: f64| thinplan_plan::ProfileVertex { x, y, bulge: 0.0 };
         let heights: Vec<f64> = (0..=60).map(|i| z0 + 0.05 * i as f64).collect();
         let beyond: Vec<f64> = heights.iter().map(|z| half(*z) - a).collect();
-        let f = MachiningFeature {
-            id: thinplan_plan::MachiningFeatureId(1),
-            owner: thinplan_plan::StiffnessFeatureId(0),
-            shape: thinplan_plan::Prism {
-                frame: thinplan_plan::PrismFrame {
-                    origin: DVec3::ZERO,
-                    x: DVec3::X,
-                    z: DVec3::Z,
-                },
-                region: thinplan_plan::Region {
-                    outer: thinplan_plan::ProfileLoop {
-                        vertices: vec![
-                            v(cx - a, 0.0),
-                            v(cx + a, 0.0),
-                            v(cx + a, 2.0),
-                            v(cx - a, 2.0),
-                        ],
-                    },
-                    holes: Vec::new(),
-                },
-                z_min: z0,
-                z_max: z1,
-            },
-            side_adjacency: vec![
-                Adjacency::Open,
-                Adjacency::Product,
-                Adjacency::Open,
-                Adjacency::Product,
-            ],
-            hole_adjacency: Vec::new(),
-            bottom_adjacency: Adjacency::Open,
-            slopes: Some(EdgeSlopes {
-                heights,
-                side: vec![Vec::new(), beyond.clone(), Vec::new(), beyond],
-                holes: Vec::new(),
-            }),
-            provenance: Provenance::new(ProvenanceSource::Default, "test"),
-        };
-        // The free space at the slab's middle: a box less the flange.
-        let free: crate::free::Shapes = vec![vec![vec![
-            [30.0, -20.0],
-            [70.0, -20.0],
-            [70.0, 0.0],
-            [cx + a, 0.0],
-            [cx + a, 2.0],
-            [70.0, 2.0],
-            [70.0, 22.0],
-            [30.0, 22.0],
-            [30.0, 2.0],
-            [cx - a, 2.0],
-            [cx - a, 0.0],
-            [30.0, 0.0],
-        ]]];
-        let swept = geometry(&f, &m, &tool, Some(&free), Some(&free), Slopes::Swept).unwrap();
-        let shifted = geometry(&f, &m, &tool, Some(&free), Some(&free), Slopes::Shifted).unwrap();
-        assert_eq!(swept.slopes, Slopes::Swept);
-        assert_eq!(shifted.slopes, Slopes::Shifted);
-
-        // Distance from p to the flange at height z (two rectangles).
-        let flange = |p: DVec2, z: f64| -> f64 {
-            let g = half(z);
-            let dy = if p.y < 0.0 {
-                -p.y
-            } else if p.y > 2.0 {
-                p.y - 2.0
+        // The right end's edge once whole and once in two pieces whose
+        // samples part slightly (nearer the region: conservative), so the
+        // moved pieces are joined at some heights and not at others.
+        let near: Vec<f64> = beyond
+            .iter()
+            .enumerate()
+            .map(|(i, b)| if i % 2 == 0 { b - 2e-3 } else { *b })
+            .collect();
+        for split in [false, true] {
+            let (outer, side_adjacency, side) = if split {
+                (
+                    vec![
+                        v(cx - a, 0.0),
+                        v(cx + a, 0.0),
+                        v(cx + a, 1.2),
+                        v(cx + a, 2.0),
+                        v(cx - a, 2.0),
+                    ],
+                    vec![
+                        Adjacency::Open,
+                        Adjacency::Product,
+                        Adjacency::Product,
+                        Adjacency::Open,
+                        Adjacency::Product,
+                    ],
+                    vec![
+                        Vec::new(),
+                        beyond.clone(),
+                        near.clone(),
+                        Vec::new(),
+                        beyond.clone(),
+                    ],
+                )
             } else {
-                0.0
+                (
+                    vec![
+                        v(cx - a, 0.0),
+                        v(cx + a, 0.0),
+                        v(cx + a, 2.0),
+                        v(cx - a, 2.0),
+                    ],
+                    vec![
+                        Adjacency::Open,
+                        Adjacency::Product,
+                        Adjacency::Open,
+                        Adjacency::Product,
+                    ],
+                    vec![Vec::new(), beyond.clone(), Vec::new(), beyond.clone()],
+                )
             };
-            let dx = (p.x - cx).abs();
-            let dx = if dx >= g { 0.0 } else { g - dx };
-            dx.hypot(dy)
-        };
-        let r = 10.0;
-        let rc = 1.0;
-        let section = |h: f64| {
-            if h >= rc {
-                r
-            } else {
-                r - rc + (rc * rc - (rc - h) * (rc - h)).sqrt()
-            }
-        };
-        let mut pts: Vec<DVec2> = swept.centre_polys.iter().flatten().copied().collect();
-        let mut y = -12.0;
-        while y < 14.0 {
-            let mut x = 36.0;
-            while x < 64.0 {
-                let p = DVec2::new(x, y);
-                if inside(p, &swept.centre_polys) {
-                    pts.push(p);
+            let f = MachiningFeature {
+                id: thinplan_plan::MachiningFeatureId(1),
+                owner: thinplan_plan::StiffnessFeatureId(0),
+                shape: thinplan_plan::Prism {
+                    frame: thinplan_plan::PrismFrame {
+                        origin: DVec3::ZERO,
+                        x: DVec3::X,
+                        z: DVec3::Z,
+                    },
+                    region: thinplan_plan::Region {
+                        outer: thinplan_plan::ProfileLoop { vertices: outer },
+                        holes: Vec::new(),
+                    },
+                    z_min: z0,
+                    z_max: z1,
+                },
+                side_adjacency,
+                hole_adjacency: Vec::new(),
+                bottom_adjacency: Adjacency::Open,
+                slopes: Some(EdgeSlopes {
+                    heights: heights.clone(),
+                    side,
+                    holes: Vec::new(),
+                }),
+                provenance: Provenance::new(ProvenanceSource::Default, "test"),
+            };
+            // The free space at the slab's middle: a box less the flange.
+            let free: crate::free::Shapes = vec![vec![vec![
+                [30.0, -20.0],
+                [70.0, -20.0],
+                [70.0, 0.0],
+                [cx + a, 0.0],
+                [cx + a, 2.0],
+                [70.0, 2.0],
+                [70.0, 22.0],
+                [30.0, 22.0],
+                [30.0, 2.0],
+                [cx - a, 2.0],
+                [cx - a, 0.0],
+                [30.0, 0.0],
+            ]]];
+            let swept = geometry(&f, &m, &tool, Some(&free), Some(&free), Slopes::Swept).unwrap();
+            let shifted =
+                geometry(&f, &m, &tool, Some(&free), Some(&free), Slopes::Shifted).unwrap();
+            assert_eq!(swept.slopes, Slopes::Swept);
+            assert_eq!(shifted.slopes, Slopes::Shifted);
+
+            // Distance from p to the flange at height z (two rectangles).
+            let flange = |p: DVec2, z: f64| -> f64 {
+                let g = half(z);
+                let dy = if p.y < 0.0 {
+                    -p.y
+                } else if p.y > 2.0 {
+                    p.y - 2.0
+                } else {
+                    0.0
+                };
+                let dx = (p.x - cx).abs();
+                let dx = if dx >= g { 0.0 } else { g - dx };
+                dx.hypot(dy)
+            };
+            let r = 10.0;
+            let rc = 1.0;
+            let section = |h: f64| {
+                if h >= rc {
+                    r
+                } else {
+                    r - rc + (rc * rc - (rc - h) * (rc - h)).sqrt()
                 }
-                x += 0.05;
+            };
+            let mut pts: Vec<DVec2> = swept.centre_polys.iter().flatten().copied().collect();
+            let mut y = -12.0;
+            while y < 14.0 {
+                let mut x = 36.0;
+                while x < 64.0 {
+                    let p = DVec2::new(x, y);
+                    if inside(p, &swept.centre_polys) {
+                        pts.push(p);
+                    }
+                    x += 0.05;
+                }
+                y += 0.05;
             }
-            y += 0.05;
-        }
-        assert!(pts.len() > 1000, "{}", pts.len());
-        let mut worst = f64::INFINITY;
-        for i in 0..=2000 {
-            let h = 3.0 * i as f64 / 2000.0;
-            let rho = section(h);
-            for p in &pts {
-                worst = worst.min(flange(*p, z0 + h) - rho);
+            assert!(pts.len() > 1000, "{}", pts.len());
+            let mut worst = f64::INFINITY;
+            for i in 0..=2000 {
+                let h = 3.0 * i as f64 / 2000.0;
+                let rho = section(h);
+                for p in &pts {
+                    worst = worst.min(flange(*p, z0 + h) - rho);
+                }
             }
-        }
-        assert!(
-            worst >= -1e-6,
-            "a tool centre is {worst} inside the flange's reach"
-        );
-        // The one-shift region lies within the swept one, which reaches
-        // further in beside the flange's ends.
-        for p in shifted.centre_polys.iter().flatten() {
             assert!(
-                inside(*p, &swept.centre_polys)
-                    || boundary_distance(*p, &swept.centre_polys) < 1e-3,
-                "({}, {}) of the shifted region outside the swept one",
-                p.x,
-                p.y
+                worst >= -1e-6,
+                "a tool centre is {worst} inside the flange's reach"
+            );
+            // The one-shift region lies within the swept one, which reaches
+            // further in beside the flange's ends.
+            for p in shifted.centre_polys.iter().flatten() {
+                assert!(
+                    inside(*p, &swept.centre_polys)
+                        || boundary_distance(*p, &swept.centre_polys) < 1e-3,
+                    "({}, {}) of the shifted region outside the swept one",
+                    p.x,
+                    p.y
+                );
+            }
+            let deepest = |g: &Geometry| {
+                g.centre_polys
+                    .iter()
+                    .flatten()
+                    .filter(|p| (p.x - cx).abs() < 0.5 && p.y > 2.0)
+                    .map(|p| p.y)
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let (ds, dh) = (deepest(&swept), deepest(&shifted));
+            assert!(
+                ds < dh - 0.2,
+                "split {split}: swept reaches y {ds}, shifted {dh}"
             );
         }
-        let deepest = |g: &Geometry| {
-            g.centre_polys
-                .iter()
-                .flatten()
-                .filter(|p| (p.x - cx).abs() < 0.5 && p.y > 2.0)
-                .map(|p| p.y)
-                .fold(f64::INFINITY, f64::min)
-        };
-        let (ds, dh) = (deepest(&swept), deepest(&shifted));
-        assert!(ds < dh - 0.2, "swept reaches y {ds}, shifted {dh}");
     }
 }
