@@ -568,15 +568,23 @@ fn swept_cuts(
         };
         // The discs' radius must run linearly between the two heights (as
         // the edges move) and never below the section radius: the tangent
-        // to the (concave) profile at the upper height lies above it.
+        // to the (concave) profile parallel to the chord between the two
+        // heights lies above it, by the least over all tangents.
         let (h0, h1) = (w[0], w[1]);
-        let top = section_radius(tool, h1);
-        let slope = if h1 < rc {
-            (rc - h1) / (rc * rc - (rc - h1) * (rc - h1)).max(1e-300).sqrt()
+        let (r0, r1) = (section_radius(tool, h0), section_radius(tool, h1));
+        let chord = (r1 - r0) / (h1 - h0);
+        let (low, top) = if h1 <= rc && chord > 0.0 {
+            // The corner radius's arc at angle t from the tip: height
+            // rc(1 − cos t), radius r − rc + rc·sin t, slope cot t.
+            let t = (1.0 / chord).atan();
+            let (ht, rt) = (rc * (1.0 - t.cos()), full - rc + rc * t.sin());
+            (
+                (rt + chord * (h0 - ht)).max(r0),
+                (rt + chord * (h1 - ht)).max(r1),
+            )
         } else {
-            0.0
+            (r0.max(r1), r0.max(r1))
         };
-        let low = (top - slope * (h1 - h0)).max(section_radius(tool, h0));
         let radii = (grown(low), grown(top));
         // The product's segments at both heights, paired: the moved edges
         // by the edge they move, and the joins between two of them (a join
