@@ -371,16 +371,7 @@ fn geometry(
         product_offset: product.clone(),
         product: match (slopes, &shifts) {
             (Slopes::Swept, Some(_)) => {
-                let sh = slope_shifts(f, tool).unwrap_or_default();
-                moved_edges(&plain, &sh)
-                    .into_iter()
-                    .flat_map(|(es, adj)| {
-                        es.into_iter()
-                            .zip(adj)
-                            .filter(|(_, a)| *a == Adjacency::Product)
-                            .map(|(e, _)| e)
-                    })
-                    .collect()
+                moved_product(&plain, &slope_shifts(f, tool).unwrap_or_default())
             }
             _ => product,
         },
@@ -443,18 +434,27 @@ fn reach_needed(s: &EdgeSlopes, offsets: &[f64], tip: f64, tool: &Tool) -> f64 {
 /// `tool`: r less the reach it needs there (0 for vertical faces and
 /// non-product edges). `None` where nothing moves.
 fn slope_shifts(f: &MachiningFeature, tool: &Tool) -> Option<Vec<Vec<f64>>> {
-    let s = f.slopes.as_ref().filter(|s| s.unusable().is_none())?;
     let r = tool.diameter / 2.0;
+    per_sloped_edge(f, |s, o| r - reach_needed(s, o, f.shape.z_min, tool))
+}
+
+/// `distance` of every edge with sampled faces (0 for the others, and for
+/// one within 1e-9), per loop; `None` where the samples are unusable or
+/// nothing moves.
+fn per_sloped_edge(
+    f: &MachiningFeature,
+    distance: impl Fn(&EdgeSlopes, &Vec<f64>) -> f64,
+) -> Option<Vec<Vec<f64>>> {
+    let s = f.slopes.as_ref().filter(|s| s.unusable().is_none())?;
     let per = |o: &Vec<f64>| -> f64 {
         if o.is_empty() {
+            return 0.0;
+        }
+        let v = distance(s, o);
+        if v.abs() < 1e-9 {
             0.0
         } else {
-            let v = r - reach_needed(s, o, f.shape.z_min, tool);
-            if v.abs() < 1e-9 {
-                0.0
-            } else {
-                v
-            }
+            v
         }
     };
     let mut v: Vec<Vec<f64>> = vec![s.side.iter().map(per).collect()];
@@ -468,29 +468,16 @@ fn slope_shifts(f: &MachiningFeature, tool: &Tool) -> Option<Vec<Vec<f64>>> {
 /// its full radius, the nearest over those heights. Never less than
 /// `slope_shifts`. `None` where nothing moves.
 fn relaxed_shifts(f: &MachiningFeature, tool: &Tool) -> Option<Vec<Vec<f64>>> {
-    let s = f.slopes.as_ref().filter(|s| s.unusable().is_none())?;
     let rc = tool.corner_radius.clamp(0.0, tool.diameter / 2.0);
     let full = f.shape.z_min + rc;
-    let per = |o: &Vec<f64>| -> f64 {
-        if o.is_empty() {
-            return 0.0;
-        }
-        // `beyond` is piecewise linear and constant past its samples.
-        let v = s
-            .heights
+    // `beyond` is piecewise linear and constant past its samples.
+    per_sloped_edge(f, |s, o| {
+        s.heights
             .iter()
             .filter(|z| **z > full)
             .map(|z| s.beyond(o, *z))
-            .fold(s.beyond(o, full), f64::min);
-        if v.abs() < 1e-9 {
-            0.0
-        } else {
-            v
-        }
-    };
-    let mut v: Vec<Vec<f64>> = vec![s.side.iter().map(per).collect()];
-    v.extend(s.holes.iter().map(|h| h.iter().map(per).collect()));
-    v.iter().flatten().any(|x| *x != 0.0).then_some(v)
+            .fold(s.beyond(o, full), f64::min)
+    })
 }
 
 /// What the region moved by `relaxed` (`relaxed_shifts`) must lose so that
@@ -524,27 +511,10 @@ fn swept_cuts(
     );
     hs.sort_by(f64::total_cmp);
     hs.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
-    let offsets = |k: usize, i: usize| -> Option<&Vec<f64>> {
-        if k == 0 {
-            s.side.get(i)
-        } else {
-            s.holes.get(k - 1).and_then(|h| h.get(i))
-        }
-    };
     let at = |out: Vec<Vec<f64>>| -> Vec<Vec<(Edge2, Adjacency, Option<usize>)>> {
         moved_edges_keyed(plain, &out)
     };
-    let outs = |h: f64| -> Vec<Vec<f64>> {
-        plain
-            .iter()
-            .enumerate()
-            .map(|(k, (es, _))| {
-                (0..es.len())
-                    .map(|i| offsets(k, i).map_or(0.0, |o| s.beyond(o, tip + h)))
-                    .collect()
-            })
-            .collect()
-    };
+    let outs = |h: f64| face_offsets(s, plain, tip + h);
     let base = at(relaxed.to_vec());
     let same = |a: &Edge2, b: &Edge2| {
         a.a.distance_squared(b.a) < 1e-18 && a.b.distance_squared(b.b) < 1e-18
@@ -660,6 +630,39 @@ fn swept_cuts(
     Some(cuts)
 }
 
+/// The product edges of the loops moved by `out` (`moved_edges`).
+fn moved_product(plain: &[(Vec<Edge2>, Vec<Adjacency>)], out: &[Vec<f64>]) -> Vec<Edge2> {
+    moved_edges_keyed(plain, out)
+        .into_iter()
+        .flatten()
+        .filter(|(_, a, _)| *a == Adjacency::Product)
+        .map(|(e, _, _)| e)
+        .collect()
+}
+
+/// Where the face beyond each edge of the loops lies at height `z` (0 for
+/// edges without samples), per loop.
+fn face_offsets(s: &EdgeSlopes, plain: &[(Vec<Edge2>, Vec<Adjacency>)], z: f64) -> Vec<Vec<f64>> {
+    plain
+        .iter()
+        .enumerate()
+        .map(|(k, (es, _))| {
+            let samples = if k == 0 {
+                Some(&s.side)
+            } else {
+                s.holes.get(k - 1)
+            };
+            (0..es.len())
+                .map(|i| {
+                    samples
+                        .and_then(|v| v.get(i))
+                        .map_or(0.0, |o| s.beyond(o, z))
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// The loops with each edge moved out by its own distance (`move_edges`),
 /// keeping each edge's adjacency (a join next to a product edge counts as
 /// product).
@@ -731,33 +734,9 @@ fn slope_check(
     hs.extend(s.heights.iter().map(|z| z - tip).filter(|h| *h > 0.0));
     hs.sort_by(f64::total_cmp);
     hs.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-    let offsets = |k: usize, i: usize| -> Option<&Vec<f64>> {
-        if k == 0 {
-            s.side.get(i)
-        } else {
-            s.holes.get(k - 1).and_then(|h| h.get(i))
-        }
-    };
     hs.iter()
         .map(|&h| {
-            let out: Vec<Vec<f64>> = plain
-                .iter()
-                .enumerate()
-                .map(|(k, (es, _))| {
-                    (0..es.len())
-                        .map(|i| offsets(k, i).map_or(0.0, |o| s.beyond(o, tip + h)))
-                        .collect()
-                })
-                .collect();
-            let product: Vec<Edge2> = moved_edges(plain, &out)
-                .into_iter()
-                .flat_map(|(es, adj)| {
-                    es.into_iter()
-                        .zip(adj)
-                        .filter(|(_, a)| *a == Adjacency::Product)
-                        .map(|(e, _)| e)
-                })
-                .collect();
+            let product = moved_product(plain, &face_offsets(s, plain, tip + h));
             (section_radius(tool, h), product)
         })
         .collect()
@@ -3236,47 +3215,24 @@ mod tests {
             .map(|(i, b)| if i % 2 == 0 { b - 2e-3 } else { *b })
             .collect();
         for split in [false, true] {
-            let (outer, side_adjacency, side) = if split {
-                (
-                    vec![
-                        v(cx - a, 0.0),
-                        v(cx + a, 0.0),
-                        v(cx + a, 1.2),
-                        v(cx + a, 2.0),
-                        v(cx - a, 2.0),
-                    ],
-                    vec![
-                        Adjacency::Open,
-                        Adjacency::Product,
-                        Adjacency::Product,
-                        Adjacency::Open,
-                        Adjacency::Product,
-                    ],
-                    vec![
-                        Vec::new(),
-                        beyond.clone(),
-                        near.clone(),
-                        Vec::new(),
-                        beyond.clone(),
-                    ],
-                )
-            } else {
-                (
-                    vec![
-                        v(cx - a, 0.0),
-                        v(cx + a, 0.0),
-                        v(cx + a, 2.0),
-                        v(cx - a, 2.0),
-                    ],
-                    vec![
-                        Adjacency::Open,
-                        Adjacency::Product,
-                        Adjacency::Open,
-                        Adjacency::Product,
-                    ],
-                    vec![Vec::new(), beyond.clone(), Vec::new(), beyond.clone()],
-                )
-            };
+            let mut outer = vec![
+                v(cx - a, 0.0),
+                v(cx + a, 0.0),
+                v(cx + a, 2.0),
+                v(cx - a, 2.0),
+            ];
+            let mut side_adjacency = vec![
+                Adjacency::Open,
+                Adjacency::Product,
+                Adjacency::Open,
+                Adjacency::Product,
+            ];
+            let mut side = vec![Vec::new(), beyond.clone(), Vec::new(), beyond.clone()];
+            if split {
+                outer.insert(2, v(cx + a, 1.2));
+                side_adjacency.insert(2, Adjacency::Product);
+                side.insert(2, near.clone());
+            }
             let f = MachiningFeature {
                 id: thinplan_plan::MachiningFeatureId(1),
                 owner: thinplan_plan::StiffnessFeatureId(0),
