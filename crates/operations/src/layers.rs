@@ -1,6 +1,8 @@
 //! The modular pattern of one machining feature: method and tool choice,
 //! the tool-centre region, z-levels, rest passes, boundary passes, entries.
 
+use std::collections::BTreeMap;
+
 use cavalier_contours::polyline::PlineSource;
 use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 use glam::{DVec2, DVec3};
@@ -102,6 +104,7 @@ const SWEPT_MARGIN: f64 = 1e-3;
 const TOUCH: f64 = 2e-3;
 
 /// The geometry of a feature for one tool.
+#[derive(Clone)]
 struct Geometry {
     r: f64,
     /// Tool-centre region and its sampled polygons.
@@ -2347,6 +2350,7 @@ fn plan_band_with(
         levels: &wall_levels,
         safe_z,
         rapid_floor,
+        geometries: Default::default(),
     };
     // The wall rest pass: stretches of product wall this tool could not
     // come beside, finished by a smaller tool right after it.
@@ -2471,6 +2475,19 @@ struct RestCtx<'a> {
     levels: &'a [f64],
     safe_z: f64,
     rapid_floor: f64,
+    /// Each candidate tool's geometry of the feature, once for both rest
+    /// passes (by tool id; `None`: no room).
+    geometries: std::cell::RefCell<BTreeMap<String, Option<Geometry>>>,
+}
+
+impl RestCtx<'_> {
+    fn geometry(&self, t: &Tool) -> Option<Geometry> {
+        self.geometries
+            .borrow_mut()
+            .entry(t.id.clone())
+            .or_insert_with(|| geometry(self.f, self.m, t, self.free, self.removed, self.g.slopes))
+            .clone()
+    }
 }
 
 /// Which rest pass: the fillet at a product floor, or stretches of product
@@ -2534,7 +2551,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     // product is open, and the removed space is the whole free space.
     let Some((small, g2, own)) = cands
         .iter()
-        .find_map(|t| geometry(c.f, c.m, t, c.free, c.removed, c.g.slopes).map(|g| (*t, g, false)))
+        .find_map(|t| c.geometry(t).map(|g| (*t, g, false)))
         .or_else(|| match rest {
             Rest::Wall(w) if w.run_last && cands.is_empty() => {
                 let mut f = c.f.clone();
