@@ -522,23 +522,23 @@ fn swept_cuts(
     let same = |a: &Edge2, b: &Edge2| {
         a.a.distance_squared(b.a) < 1e-18 && a.b.distance_squared(b.b) < 1e-18
     };
+    // A disc all but as large as the full radius would run a hair
+    // inside the relaxed region's boundary, along it: the polyline
+    // booleans fail on such near-coincident edges, so it is made to
+    // cross clearly (a thousandth of a millimetre more room is lost).
+    let full = tool.diameter / 2.0;
+    let grown = |r: f64| {
+        let r = r + SWEPT_MARGIN;
+        if r > full - TOUCH {
+            r.max(full + TOUCH)
+        } else {
+            r
+        }
+    };
     let mut cuts = Vec::new();
     let mut prev = at(outs(hs[0]));
     for w in hs.windows(2) {
         let next = at(outs(w[1]));
-        // A disc all but as large as the full radius would run a hair
-        // inside the relaxed region's boundary, along it: the polyline
-        // booleans fail on such near-coincident edges, so it is made to
-        // cross clearly (a thousandth of a millimetre more room is lost).
-        let full = tool.diameter / 2.0;
-        let grown = |r: f64| {
-            let r = r + SWEPT_MARGIN;
-            if r > full - TOUCH {
-                r.max(full + TOUCH)
-            } else {
-                r
-            }
-        };
         // The discs' radius must run linearly between the two heights (as
         // the edges move) and never below the section radius: the tangent
         // to the (concave) profile parallel to the chord between the two
