@@ -9,8 +9,8 @@ use crate::engagement::{engagement_stats, EngagementParams, EngagementStats, Ent
 use crate::geom::{point_in_loop, sample_pline, SegIndex};
 use crate::timing::{time_path, MachineLimits};
 use crate::{
-    curvilinear_path, offset_path, offset_path_gap_matched, offset_path_sharp, Pocket, PocketError,
-    PocketParams,
+    curvilinear_path, offset_path, offset_path_gap_matched, offset_path_sharp, zigzag_path, Pocket,
+    PocketError, PocketParams, PocketPath,
 };
 
 /// A convex polygon (counter-clockwise vertices) with every corner rounded by radius `rc`.
@@ -666,6 +666,46 @@ pub struct BenchRow {
     pub toppra_ratio: Option<f64>,
     /// The same with our schedule on the path's own points ([`ToppraRatios::native`]).
     pub toppra_ratio_native: Option<f64>,
+    /// Rectilinear (zigzag) baseline, the one Bieterman's time-saving chart compares against
+    /// ([`best_zigzag`]: passes ≤ stepover apart joined along the roughing boundary, then
+    /// the same finishing pass, at the pass angle of least time); null in older JSON or where
+    /// the pocket takes no zigzag.
+    #[serde(default)]
+    pub zigzag: Option<PathStats>,
+    /// The pass angle used (degrees from +x).
+    #[serde(default)]
+    pub zigzag_angle_deg: Option<f64>,
+    /// Time saving of curvilinear vs `zigzag`, %.
+    #[serde(default)]
+    pub saving_vs_zigzag_pct: Option<f64>,
+}
+
+/// Pass angles [`best_zigzag`] tries (degrees): every 15°.
+pub const ZIGZAG_ANGLES_DEG: [f64; 12] = [
+    0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0, 105.0, 120.0, 135.0, 150.0, 165.0,
+];
+
+/// The zigzag baseline at its best: of the pass angles in [`ZIGZAG_ANGLES_DEG`], the one whose
+/// path our schedule times fastest (ties: the first). Returns the path, its schedule and the
+/// angle in degrees; `None` if no angle gives a zigzag (islands, a pass meeting the boundary
+/// more than twice).
+pub fn best_zigzag(
+    pocket: &Pocket,
+    params: &PocketParams,
+    feed: f64,
+    limits: &MachineLimits,
+) -> Option<(PocketPath, crate::timing::Schedule, f64)> {
+    let mut best: Option<(PocketPath, crate::timing::Schedule, f64)> = None;
+    for deg in ZIGZAG_ANGLES_DEG {
+        let Ok(p) = zigzag_path(pocket, params, deg.to_radians()) else {
+            continue;
+        };
+        let t = time_path(&p.points, feed, limits);
+        if best.as_ref().is_none_or(|b| t.total_time < b.1.total_time) {
+            best = Some((p, t, deg));
+        }
+    }
+    best
 }
 
 /// Parameters used for a bench pocket: tool = width / 6, stepover 40 % and finishing 10 % of
@@ -763,6 +803,7 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                     PathStats::new(&t, None, eng(&ap.points, ap.entry()), &entry)
                 })
             });
+            let zz = best_zigzag(&bp.pocket, &params, feed, &cfg.limits);
             if cfg.toppra.is_some() {
                 topp.push((rows.len(), cur.points.clone()));
             }
@@ -798,6 +839,11 @@ pub fn bench_pockets(cfg: &BenchConfig) -> Result<Vec<BenchRow>, PocketError> {
                 curvilinear_turns_bound: cur.turns_lower_bound(params.stepover),
                 toppra_ratio: None,
                 toppra_ratio_native: None,
+                saving_vs_zigzag_pct: zz
+                    .as_ref()
+                    .map(|(_, t, _)| 100.0 * (1.0 - t_cur.total_time / t.total_time)),
+                zigzag_angle_deg: zz.as_ref().map(|z| z.2),
+                zigzag: zz.map(|(p, t, _)| stats(&t, &p)),
             });
         }
     }
@@ -827,10 +873,10 @@ pub fn format_table(rows: &[BenchRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<17} {:>5} {:>6} {:>5} {:>5} | {:>6} {:>6} | {:>7} {:>6} {:>11} | {:>6} {:>6} | {:>6} | {:>5} {:>7} {:>6} | {:>6} {:>6} {:>6} | {:>10} | {:>13} | {:>19}",
+        "{:<17} {:>5} {:>6} {:>5} {:>5} | {:>6} {:>6} | {:>7} {:>6} {:>11} | {:>6} {:>6} | {:>6} | {:>5} {:>7} {:>6} | {:>6} {:>6} {:>4} | {:>6} {:>6} {:>6} {:>6} | {:>10} | {:>13} | {:>19}",
         "pocket", "L/D", "L mm", "tool", "step", "off mm", "off s", "curv mm", "curv s", "method",
-        "adp mm", "adp s", "shrp s", "s'", "gapm mm", "gapm s", "save%", "sharp", "gapm",
-        "turns/bd/r", "TOPP-RA s/n", "eng p99° o/c/g/a"
+        "adp mm", "adp s", "shrp s", "s'", "gapm mm", "gapm s", "zz mm", "zz s", "zz°", "save%",
+        "sharp", "gapm", "zz", "turns/bd/r", "TOPP-RA s/n", "eng p99° o/c/g/a"
     );
     for r in rows {
         let (am, at) = match &r.adaptive {
@@ -849,9 +895,18 @@ pub fn format_table(rows: &[BenchRow]) -> String {
                 .unwrap_or_else(|| "-".into()),
             r.offset_rings
         );
+        let (zm, zt, za, zs) = match (&r.zigzag, r.zigzag_angle_deg, r.saving_vs_zigzag_pct) {
+            (Some(z), Some(a), Some(p)) => (
+                format!("{:.0}", z.length_mm),
+                format!("{:.2}", z.time_s),
+                format!("{a:.0}"),
+                format!("{p:.1}"),
+            ),
+            _ => ("-".into(), "-".into(), "-".into(), "-".into()),
+        };
         let _ = writeln!(
             s,
-            "{:<17} {:>5.1} {:>6.1} {:>5.2} {:>5.2} | {:>6.0} {:>6.2} | {:>7.0} {:>6.2} {:>11} | {:>6} {:>6} | {:>6.2} | {:>5.2} {:>7.0} {:>6.2} | {:>6.1} {:>6.1} {:>6.1} | {:>10} | {:>13} | {:>19}",
+            "{:<17} {:>5.1} {:>6.1} {:>5.2} {:>5.2} | {:>6.0} {:>6.2} | {:>7.0} {:>6.2} {:>11} | {:>6} {:>6} | {:>6.2} | {:>5.2} {:>7.0} {:>6.2} | {:>6} {:>6} {:>4} | {:>6.1} {:>6.1} {:>6.1} {:>6} | {:>10} | {:>13} | {:>19}",
             r.pocket,
             r.l_over_d,
             r.size_mm,
@@ -868,9 +923,13 @@ pub fn format_table(rows: &[BenchRow]) -> String {
             r.gap_matched_ring_step_mm,
             r.offset_gap_matched.length_mm,
             r.offset_gap_matched.time_s,
+            zm,
+            zt,
+            za,
             r.saving_pct,
             r.saving_vs_sharp_pct,
             r.saving_vs_gap_matched_pct,
+            zs,
             turns,
             match (r.toppra_ratio, r.toppra_ratio_native) {
                 (Some(a), Some(b)) => format!("{a:.4}/{b:.4}"),

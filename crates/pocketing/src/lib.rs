@@ -26,6 +26,7 @@ pub mod profile;
 pub mod spiral;
 pub mod svg;
 pub mod timing;
+pub mod zigzag;
 
 use cavalier_contours::polyline::{PlineOrientation, PlineSource, Polyline};
 use glam::DVec2;
@@ -37,6 +38,7 @@ pub use offset::{offset_path, offset_path_gap_matched, offset_path_sharp};
 pub use profile::PocketProfile;
 pub use spiral::curvilinear_path;
 pub use svg::pocket_svg;
+pub use zigzag::zigzag_path;
 
 /// Errors of pocket path generation.
 #[derive(Debug, Clone, PartialEq)]
@@ -203,6 +205,9 @@ pub enum Method {
     /// offsets' even spacing, for elongated pockets (a slot).
     OffsetSpiral,
     OffsetFallback,
+    /// Rectilinear passes joined along the roughing boundary ([`zigzag::zigzag_path`]): a
+    /// baseline, never chosen for a pocket.
+    Zigzag,
 }
 
 impl Method {
@@ -212,6 +217,7 @@ impl Method {
             Method::Curvilinear => "curvilinear",
             Method::OffsetSpiral => "offset-spiral",
             Method::OffsetFallback => "offset-fallback",
+            Method::Zigzag => "zigzag",
         }
     }
 }

@@ -8,8 +8,8 @@ use proptest::prelude::*;
 use thinplan_pocketing::bench::{bench_family, bench_params, rounded_rect};
 use thinplan_pocketing::geom::{point_in_loop, sample_pline, SegIndex};
 use thinplan_pocketing::{
-    curvilinear_path, offset_path, offset_path_gap_matched, offset_path_sharp, Field, Method,
-    Pocket, PocketParams, PocketPath,
+    curvilinear_path, offset_path, offset_path_gap_matched, offset_path_sharp, zigzag_path, Field,
+    Method, Pocket, PocketParams, PocketPath,
 };
 
 fn check(pocket: &Pocket, params: &PocketParams, path: &PocketPath, label: &str) {
@@ -241,6 +241,53 @@ fn check_baselines(pocket: &Pocket, params: &PocketParams, off: &PocketPath, lab
     let mut p = params.clone();
     p.stepover = ring_step.max(p.finish_stepover);
     check(pocket, &p, &gm, &format!("offset-gap-matched {label}"));
+    for deg in [0.0, 30.0, 90.0] {
+        let zz = zigzag_path(pocket, params, f64::to_radians(deg)).unwrap();
+        let label = format!("zigzag {deg}° {label}");
+        check(pocket, params, &zz, &label);
+        check_zigzag_passes(params, &zz, deg, &label);
+    }
+}
+
+/// The zigzag's passes, found independently of its generator: the straight runs along the pass
+/// direction longer than a tool radius. Successive passes lie at most one stepover apart, and
+/// alternate in direction; the finishing pass is the same loop as the offset path's.
+fn check_zigzag_passes(params: &PocketParams, zz: &PocketPath, deg: f64, label: &str) {
+    let dir = DVec2::from_angle(deg.to_radians());
+    let normal = dir.perp();
+    let rough = &zz.points[..zz.finish_start];
+    // runs of consecutive segments along ±dir
+    let mut passes: Vec<(f64, f64)> = Vec::new(); // (offset across, signed length)
+    let mut i = 0;
+    while i + 1 < rough.len() {
+        let along = |k: usize| {
+            let d = rough[k + 1] - rough[k];
+            let l = d.length();
+            (l > 0.0 && (d.dot(normal) / l).abs() < 1e-9).then(|| d.dot(dir).signum())
+        };
+        if let Some(sign) = along(i) {
+            let start = i;
+            while i + 1 < rough.len() && along(i) == Some(sign) {
+                i += 1;
+            }
+            let len = (rough[i] - rough[start]).dot(dir);
+            if len.abs() > params.tool_diameter / 2.0 {
+                passes.push((rough[start].dot(normal), len));
+            }
+        } else {
+            i += 1;
+        }
+    }
+    assert!(passes.len() >= 2, "{label}: {} passes", passes.len());
+    for w in passes.windows(2) {
+        let gap = (w[1].0 - w[0].0).abs();
+        assert!(
+            gap <= params.stepover * (1.0 + 1e-9) && gap > 0.0,
+            "{label}: passes {gap} apart (stepover {})",
+            params.stepover
+        );
+        assert!(w[0].1 * w[1].1 < 0.0, "{label}: passes not alternating");
+    }
 }
 
 // Default run: a representative subset on coarser (still converged-enough) meshes. The full
