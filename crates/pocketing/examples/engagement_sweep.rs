@@ -135,8 +135,14 @@ fn cost(ld: f64) {
     for bp in bench_family(l) {
         let params = bench_params(&bp);
         type Make = fn(&Pocket, &PocketParams) -> Result<PocketPath, PocketError>;
-        let makers: [(&str, Make); 2] =
-            [("offset", offset_path), ("curvilinear", curvilinear_path)];
+        fn zigzag(p: &Pocket, q: &PocketParams) -> Result<PocketPath, PocketError> {
+            thinplan_pocketing::zigzag_path(p, q, 0.0)
+        }
+        let makers: [(&str, Make); 3] = [
+            ("offset", offset_path),
+            ("curvilinear", curvilinear_path),
+            ("zigzag 0°", zigzag),
+        ];
         for (name, make) in makers {
             let t0 = Instant::now();
             let path = make(&bp.pocket, &params).expect("path");
