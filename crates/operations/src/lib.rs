@@ -14,6 +14,7 @@
 //! stage 8.
 
 mod caps;
+mod coverage;
 mod free;
 pub mod geom;
 mod layers;
@@ -388,7 +389,6 @@ fn drop_covered_rest(
     if !ops.iter().any(own) {
         return Vec::new();
     }
-    let view = links::View::new(up);
     let radius = |o: &Operation| {
         tools
             .tools
@@ -396,39 +396,9 @@ fn drop_covered_rest(
             .find(|t| t.id == o.tool)
             .map_or(0.0, |t| 0.5 * t.diameter)
     };
-    // Every other operation's cutting segments in plan view, bucketed.
-    const BUCKET: f64 = 5.0;
-    let key = |p: DVec2| ((p.x / BUCKET).floor() as i64, (p.y / BUCKET).floor() as i64);
-    let mut segs: Vec<(DVec2, DVec2, f64, f64)> = Vec::new();
-    let mut grid: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
-    for o in ops.iter().filter(|o| !own(o)) {
-        let mut from = o.start;
-        for m in &o.moves {
-            if m.region != Region3::Rapid {
-                // An arc as its chord, its disc smaller by the sagitta
-                // (at most half the chord): never "covered" wrongly.
-                let (a, b) = (view.xy(from), view.xy(m.to));
-                let r = radius(o)
-                    - if m.arc.is_some() {
-                        0.5 * a.distance(b)
-                    } else {
-                        0.0
-                    };
-                let z = view.z(from).max(view.z(m.to));
-                let (lo, hi) = (
-                    key(a.min(b) - DVec2::splat(r)),
-                    key(a.max(b) + DVec2::splat(r)),
-                );
-                for i in lo.0..=hi.0 {
-                    for j in lo.1..=hi.1 {
-                        grid.entry((i, j)).or_default().push(segs.len());
-                    }
-                }
-                segs.push((a, b, z, r));
-            }
-            from = m.to;
-        }
-    }
+    // Every other operation's cutting moves.
+    let cov = coverage::Coverage::new(ops.iter().filter(|o| !own(o)), up, tools);
+    let view = cov.view();
     let mut drop = Vec::new();
     for (idx, o) in ops.iter().enumerate().filter(|(_, o)| own(o)) {
         let r = radius(o);
@@ -442,18 +412,14 @@ fn drop_covered_rest(
         let mut covered = true;
         'moves: for m in &o.moves {
             if m.region == Region3::Boundary {
-                let (a, b) = (view.xy(from), view.xy(m.to));
-                let z = view.z(from).min(view.z(m.to));
-                let n = ((a.distance(b) / 0.5).ceil() as usize).max(1);
+                let (a, b) = (from, m.to);
+                let z = view.z(a).min(view.z(b));
+                let n = ((view.xy(a).distance(view.xy(b)) / 0.5).ceil() as usize).max(1);
                 for s in 0..=n {
                     let c = a.lerp(b, s as f64 / n as f64);
-                    let hit = grid.get(&key(c)).is_some_and(|list| {
-                        list.iter().any(|&q| {
-                            let (p0, p1, zq, rq) = segs[q];
-                            zq <= z + 1e-6 && geom::dist_point_seg(c, p0, p1) <= rq - r + ml
-                        })
-                    });
-                    if !hit {
+                    // at the move's lowest height
+                    let c = c + view.up() * (z - view.z(c));
+                    if !cov.covers(c, r, ml) {
                         covered = false;
                         break 'moves;
                     }

@@ -57,6 +57,7 @@ pub struct LinkReport {
 }
 
 /// Plan view along the set-up's up: x, y across it, z along it.
+#[derive(Clone, Copy)]
 pub(crate) struct View {
     ex: DVec3,
     ey: DVec3,
@@ -79,6 +80,9 @@ impl View {
     }
     pub(crate) fn z(&self, p: DVec3) -> f64 {
         p.dot(self.up)
+    }
+    pub(crate) fn up(&self) -> DVec3 {
+        self.up
     }
 }
 
