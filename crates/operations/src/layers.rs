@@ -26,6 +26,10 @@ pub(crate) struct Env<'a> {
     pub machine: &'a Machine,
     pub limits: thinplan_feeds::MachineLimits,
     pub global_top: f64,
+    /// Set for stage 7's second pass: plan only the feature's orphan wall
+    /// stretches, those no operation of the first pass cut
+    /// ([`Rest::Orphan`]).
+    pub orphans: Option<&'a crate::coverage::Coverage>,
 }
 
 impl<'a> Env<'a> {
@@ -41,6 +45,7 @@ impl<'a> Env<'a> {
             machine: self.machine,
             limits: self.limits.clone(),
             global_top: self.global_top,
+            orphans: self.orphans,
         }
     }
 }
@@ -1435,6 +1440,10 @@ pub(crate) fn feature_operations(
     obstacles: &[crate::free::Obstacle],
 ) -> Result<Made, String> {
     let whole = plan_band(f, env, free, removed)?;
+    if env.orphans.is_some() {
+        // Run last, when every other feature is gone: no shank bands.
+        return Ok(whole);
+    }
     let Some(free) = free else {
         return Ok(whole);
     };
@@ -2352,6 +2361,23 @@ fn plan_band_with(
         rapid_floor,
         geometries: Default::default(),
     };
+    // Stage 7's second pass: only the orphan stretches.
+    if let Some(cov) = env.orphans {
+        let mut orphan = Vec::new();
+        if let Some(w) = m.wall_rest.as_ref().filter(|_| !g.product.is_empty()) {
+            match rest_pass(&ctx, Rest::Orphan(w, cov)) {
+                Ok(Some(op)) => orphan.push(op),
+                Ok(None) => {}
+                Err(e) => warnings.push(format!("{}: no orphan wall rest pass: {e}", f.id)),
+            }
+        }
+        return Ok(Made {
+            ops: orphan,
+            warnings,
+            unreachable: Vec::new(),
+            reach: g.centre_polys.clone(),
+        });
+    }
     // The wall rest pass: stretches of product wall this tool could not
     // come beside, finished by a smaller tool right after it.
     if let Some(w) = m
@@ -2490,12 +2516,21 @@ impl RestCtx<'_> {
     }
 }
 
+/// Provenance value (1) of a wall rest pass for orphan stretches
+/// ([`Rest::Orphan`]).
+pub(crate) const ORPHAN: &str = "orphan_stretches";
+
 /// Which rest pass: the fillet at a product floor, or stretches of product
 /// walls the feature's tool could not come beside.
 #[derive(Clone, Copy)]
 enum Rest<'k> {
     Floor(&'k RestPass),
     Wall(&'k WallRest),
+    /// Stretches of the feature's product walls that no operation of stage
+    /// 7's first pass came beside within `min_left` (the coverage of all of
+    /// them), at any of the feature's levels: planned with the smallest
+    /// tool that has room, every other feature gone, run last.
+    Orphan(&'k WallRest, &'k crate::coverage::Coverage),
 }
 
 /// A rest pass along the product walls with a smaller tool of the set.
@@ -2533,6 +2568,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
                     && t.diameter <= main.diameter
             }
             Rest::Wall(_) => t.diameter < main.diameter - 1e-9,
+            Rest::Orphan(..) => true,
         })
         .collect();
     cands.sort_by(|a, b| match rest {
@@ -2545,38 +2581,54 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             .diameter
             .total_cmp(&a.diameter)
             .then_with(|| a.id.cmp(&b.id)),
+        // the most reach
+        Rest::Orphan(..) => a
+            .diameter
+            .total_cmp(&b.diameter)
+            .then_with(|| a.id.cmp(&b.id)),
     });
-    // No smaller tool: a wall rest pass run last may use the feature's own
-    // tool, now that every other feature is gone: every edge that is not
+    // Run last, every other feature is gone: every edge that is not
     // product is open, and the removed space is the whole free space.
-    let Some((small, g2, own)) = cands
-        .iter()
-        .find_map(|t| c.geometry(t).map(|g| (*t, g, false)))
-        .or_else(|| match rest {
-            Rest::Wall(w) if w.run_last && cands.is_empty() => {
-                let mut f = c.f.clone();
-                let open = |a: &mut Adjacency| {
-                    if *a == Adjacency::Feature {
-                        *a = Adjacency::Open;
-                    }
-                };
-                f.side_adjacency.iter_mut().for_each(open);
-                f.hole_adjacency
-                    .iter_mut()
-                    .flat_map(|h| h.iter_mut())
-                    .for_each(open);
-                geometry(&f, c.m, main, c.free, c.free, c.g.slopes).map(|g| (main, g, true))
+    let opened = |t: &Tool| {
+        let mut f = c.f.clone();
+        let open = |a: &mut Adjacency| {
+            if *a == Adjacency::Feature {
+                *a = Adjacency::Open;
             }
-            _ => None,
-        })
-    else {
+        };
+        f.side_adjacency.iter_mut().for_each(open);
+        f.hole_adjacency
+            .iter_mut()
+            .flat_map(|h| h.iter_mut())
+            .for_each(open);
+        geometry(&f, c.m, t, c.free, c.free, c.g.slopes)
+    };
+    // No smaller tool: a wall rest pass run last may use the feature's own
+    // tool, with every other feature gone.
+    let found = match rest {
+        Rest::Orphan(..) => cands.iter().find_map(|t| opened(t).map(|g| (*t, g, false))),
+        _ => cands
+            .iter()
+            .find_map(|t| c.geometry(t).map(|g| (*t, g, false)))
+            .or_else(|| match rest {
+                Rest::Wall(w) if w.run_last && cands.is_empty() => {
+                    opened(main).map(|g| (main, g, true))
+                }
+                _ => None,
+            }),
+    };
+    let Some((small, g2, own)) = found else {
         return Ok(None);
     };
     let d2 = small.diameter;
     // Where the small tool's disc lies inside a disc the feature's tool
     // swept down to the floor: its centre region grown by r − r₂ (a hair
-    // more, so the chains at exactly r₂ from the walls are inside).
-    let cleared = c.g.centre.offset(-(c.g.r - g2.r + 1e-2)).polygons(STEP);
+    // more, so the chains at exactly r₂ from the walls are inside). Orphan
+    // stretches are cut last: the whole free space is cleared by then.
+    let cleared = match rest {
+        Rest::Orphan(..) => g2.centre_polys.clone(),
+        _ => c.g.centre.offset(-(c.g.r - g2.r + 1e-2)).polygons(STEP),
+    };
     if cleared.is_empty() {
         return Ok(None);
     }
@@ -2591,6 +2643,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             false,
             w.run_up,
         ),
+        Rest::Orphan(w, _) => (Vec::new(), false, w.run_up),
     };
     // Which loop stretches run along product: within the boundary band
     // (half the boundary stepover), as for the feature's own passes.
@@ -2600,10 +2653,17 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     let band = 0.5 * bd.stepover * d2;
     let mut passes = Vec::new();
     for (chain, _) in boundary_chains(&g2, band, mk.spindle) {
-        let ok = |e: &Edge2| {
-            e.sample(STEP)
+        let ok = |e: &Edge2| match rest {
+            // wanted where some sample was not cut round at some level
+            Rest::Orphan(w, cov) => e.sample(STEP).iter().any(|p| {
+                c.levels
+                    .iter()
+                    .any(|&z| !cov.covers(crate::to_part(c.f, *p, z), g2.r, w.min_left))
+            }),
+            _ => e
+                .sample(STEP)
                 .iter()
-                .all(|p| inside(*p, &beside) == want_inside)
+                .all(|p| inside(*p, &beside) == want_inside),
         };
         // A stretch ends where the feature's tool stopped being beside the
         // wall (floor) or came close enough (wall): decided piece by piece
@@ -2671,7 +2731,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     };
     let levels: Vec<f64> = match rest {
         Rest::Floor(_) => vec![c.z_min],
-        Rest::Wall(_) => c.levels.to_vec(),
+        Rest::Wall(_) | Rest::Orphan(..) => c.levels.to_vec(),
     };
     let mut b = Builder::new(DVec3::ZERO);
     let mut started = false;
@@ -2686,7 +2746,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     let (rpm, feed_rough, feed_finish) = conditions(c.env, small);
     let suffix = match rest {
         Rest::Floor(_) => "rest_pass",
-        Rest::Wall(_) => "wall_rest",
+        Rest::Wall(_) | Rest::Orphan(..) => "wall_rest",
     };
     let mut prov = Provenance::new(
         ProvenanceSource::Knowledge,
@@ -2703,6 +2763,13 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     v.insert("feed_boundary_mm_min".into(), feed_finish);
     v.insert("passes".into(), passes.len() as f64);
     v.insert("layers".into(), levels.len() as f64);
+    // the deepest cut of a wall pass: between levels, or the first below
+    // the top
+    let wall_depth = levels
+        .windows(2)
+        .map(|p| p[0] - p[1])
+        .chain(std::iter::once(c.z_top - levels[0]))
+        .fold(0.0, f64::max);
     match rest {
         Rest::Floor(rp) => {
             v.insert("min_corner_gain_mm".into(), rp.min_corner_gain);
@@ -2721,17 +2788,27 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             if w.run_last {
                 v.insert(crate::RUN_LAST.into(), 1.0);
             }
-            let depth = levels
-                .windows(2)
-                .map(|p| p[0] - p[1])
-                .chain(std::iter::once(c.z_top - levels[0]))
-                .fold(0.0, f64::max);
-            v.insert("depth_of_cut_mm".into(), depth);
+            v.insert("depth_of_cut_mm".into(), wall_depth);
             prov.note = format!(
                 "pattern=RestPass; layer=walls; wall stretches {} (D {:.1} mm) left more than \
                  {:.2} mm on, finished by {} (D {:.1} mm) at {} levels",
                 main.id,
                 main.diameter,
+                w.min_left,
+                small.id,
+                small.diameter,
+                levels.len()
+            );
+        }
+        Rest::Orphan(w, _) => {
+            v.insert("min_left_mm".into(), w.min_left);
+            v.insert(crate::RUN_LAST.into(), 1.0);
+            v.insert(ORPHAN.into(), 1.0);
+            v.insert("depth_of_cut_mm".into(), wall_depth);
+            prov.note = format!(
+                "pattern=RestPass; layer=walls; orphan stretches: product wall no operation \
+                 came within {:.2} mm of, finished by {} (D {:.1} mm) at {} levels, run last \
+                 with every other feature gone",
                 w.min_left,
                 small.id,
                 small.diameter,

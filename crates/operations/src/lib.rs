@@ -122,6 +122,29 @@ pub fn operations(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsEr
 
 /// Stage 7 without the stage check (synthetic plans in tests and tools).
 pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError> {
+    let mut out = first_pass(plan, k)?;
+    finish_orphan_stretches(plan, k, &mut out)?;
+    Ok(out)
+}
+
+/// Stage 7's second pass on `ops` (which [`operations`] runs): wall rest
+/// passes, run last, for the product wall stretches of each feature that no
+/// operation in `ops` came beside (see `orphan_stretches`). Public so that a
+/// driver that edits operations can finish what the edit left.
+pub fn finish_orphan_stretches(
+    plan: &Plan,
+    k: &Knowledge,
+    ops: &mut Operations,
+) -> Result<(), OperationsError> {
+    let env = environment(plan, k)?;
+    let d_max = env.tools.reach_and_rise().map_or(0.0, |(d, _)| d);
+    let positions = precedence::machining_positions(plan);
+    orphan_stretches(plan, &env, ops, d_max, &positions);
+    Ok(())
+}
+
+/// The knowledge a plan's set-up names, for stage 7.
+fn environment<'k>(plan: &Plan, k: &'k Knowledge) -> Result<layers::Env<'k>, OperationsError> {
     let (machine, tools, limits) = resources(plan, k)?;
     let material =
         k.material(&plan.setup.material)
@@ -136,14 +159,21 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
         .iter()
         .map(|f| f.shape.frame.origin.dot(up) + f.shape.z_max)
         .fold(f64::NEG_INFINITY, f64::max);
-    let env = layers::Env {
+    Ok(layers::Env {
         k,
         tools,
         material,
         machine,
         limits,
         global_top,
-    };
+        orphans: None,
+    })
+}
+
+/// Stage 7's first pass: each feature's operations.
+fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError> {
+    let env = environment(plan, k)?;
+    let tools = env.tools;
     let mut out = Operations {
         operations: Vec::new(),
         warnings: Vec::new(),
@@ -373,6 +403,137 @@ pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, Op
     Ok(out)
 }
 
+/// Stage 7's second pass: product wall stretches no operation came beside.
+///
+/// Each feature's passes follow its own product edges, in the space that is
+/// removed when it is cut. A stretch of wall that its tool could not reach
+/// then (a neighbour still stood where the tool had to be) is left to no
+/// one: the neighbour, cut later, does not follow another feature's walls.
+/// So once every feature has its operations, the features whose product
+/// walls have a stretch that no operation came within the wall rest's
+/// `min_left` of (at the floor, for the smallest tool's disc touching the
+/// wall where it fits) are planned again for those stretches alone
+/// ([`layers`]' `Rest::Orphan`): the smallest tool with room, every other
+/// feature gone, run last. Features on sloped faces are left out.
+fn orphan_stretches(
+    plan: &Plan,
+    env: &layers::Env,
+    out: &mut Operations,
+    d_max: f64,
+    positions: &[usize],
+) {
+    let mk = &env.k.methods;
+    let Some(min_left) = mk
+        .methods
+        .iter()
+        .filter_map(|m| m.wall_rest.as_ref().map(|w| w.min_left))
+        .reduce(f64::min)
+    else {
+        return;
+    };
+    let Some(r_s) = env
+        .tools
+        .tools
+        .iter()
+        .map(|t| 0.5 * t.diameter)
+        .reduce(f64::min)
+    else {
+        return;
+    };
+    let cov = coverage::Coverage::new(out.operations.iter(), plan.setup.up, env.tools);
+    let with_ops: std::collections::BTreeSet<u32> =
+        out.operations.iter().map(|o| o.feature.0).collect();
+    let orphan_env = layers::Env {
+        orphans: Some(&cov),
+        ..env.clone_with_tools(env.tools)
+    };
+    let mut made = Vec::new();
+    for (i, f) in plan.machining_features.iter().enumerate() {
+        if !with_ops.contains(&(i as u32))
+            || f.slopes.is_some()
+            || !has_orphan_stretch(f, &cov, r_s, min_left)
+        {
+            continue;
+        }
+        let free = free::free_space(plan, i, 2.0 * d_max);
+        let removed = free::removed_space(plan, i, 2.0 * d_max, positions);
+        let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            layers::feature_operations(f, &orphan_env, free.as_ref(), removed.as_ref(), &[])
+        }));
+        match res {
+            Ok(Ok(m)) => {
+                out.warnings.extend(m.warnings);
+                made.extend(m.ops.into_iter().map(|lo| (f, lo)));
+            }
+            Ok(Err(e)) => out
+                .warnings
+                .push(format!("{}: no orphan wall rest pass: {e}", f.id)),
+            Err(_) => out.warnings.push(format!(
+                "{}: no orphan wall rest pass: the offset geometry failed on this profile \
+                 (library panic)",
+                f.id
+            )),
+        }
+    }
+    for (f, lo) in made {
+        let id = OperationId(out.operations.len() as u32);
+        out.operations.push(to_operation(id, f, lo, env));
+    }
+}
+
+/// Whether some stretch of `f`'s product walls was not cut round at its
+/// floor: the smallest tool's disc (radius `r`) touching the wall, where it
+/// fits between the feature's product edges, lies inside no operation's
+/// disc within `min_left`.
+fn has_orphan_stretch(
+    f: &thinplan_plan::MachiningFeature,
+    cov: &coverage::Coverage,
+    r: f64,
+    min_left: f64,
+) -> bool {
+    const STEP: f64 = 0.5;
+    let loops = geom::adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
+    let product: Vec<geom::Edge2> = loops
+        .iter()
+        .flat_map(|(es, adj)| es.iter().zip(adj))
+        .filter(|(_, a)| **a == thinplan_plan::Adjacency::Product)
+        .map(|(e, _)| *e)
+        .collect();
+    let near_product = |c: DVec2| {
+        product.iter().any(|e| {
+            e.sample(STEP)
+                .windows(2)
+                .any(|w| geom::dist_point_seg(c, w[0], w[1]) < r - 1e-3)
+        })
+    };
+    for (k, (es, adj)) in loops.iter().enumerate() {
+        // the region lies left of a counter-clockwise outer loop and right
+        // of a counter-clockwise hole
+        let pts: Vec<DVec2> = es.iter().flat_map(|e| e.sample(STEP)).collect();
+        let area: f64 = (0..pts.len())
+            .map(|i| pts[i].perp_dot(pts[(i + 1) % pts.len()]))
+            .sum();
+        let left = (area > 0.0) == (k == 0);
+        for (e, a) in es.iter().zip(adj) {
+            if *a != thinplan_plan::Adjacency::Product {
+                continue;
+            }
+            for w in e.sample(STEP).windows(2) {
+                let d = (w[1] - w[0]).normalize_or_zero();
+                let n = if left { d.perp() } else { -d.perp() };
+                let c = 0.5 * (w[0] + w[1]) + n * (r + 1e-3);
+                if near_product(c) {
+                    continue; // no room for the disc here (a corner)
+                }
+                if !cov.covers(to_part(f, c, f.shape.z_min), r, min_left) {
+                    return true;
+                }
+            }
+        }
+    }
+    false
+}
+
 /// Wall rest passes with the feature's own tool after every feature
 /// (`after_every_feature`) are planned per feature, without knowing what
 /// the other features' operations cut. One whose every boundary point
@@ -460,6 +621,16 @@ fn drop_covered_rest(
     refusals
 }
 
+/// A point of a feature's local frame (plan position `c`, height `z`) in
+/// part coordinates.
+pub(crate) fn to_part(f: &thinplan_plan::MachiningFeature, c: DVec2, z: f64) -> DVec3 {
+    let fr = &f.shape.frame;
+    let zz = fr.z.normalize_or_zero();
+    let x = (fr.x - zz * fr.x.dot(zz)).normalize_or_zero();
+    let y = zz.cross(x);
+    fr.origin + x * c.x + y * c.y + zz * z
+}
+
 /// A whole feature's volume (mm³): its region over its depth.
 fn feature_volume(f: &thinplan_plan::MachiningFeature) -> f64 {
     layers::region_area(f) * (f.shape.z_max - f.shape.z_min).max(0.0)
@@ -542,12 +713,9 @@ fn to_operation(
     lo: layers::LocalOp,
     env: &layers::Env,
 ) -> Operation {
-    let fr = &f.shape.frame;
-    let z = fr.z.normalize_or_zero();
-    let x = (fr.x - z * fr.x.dot(z)).normalize_or_zero();
-    let y = z.cross(x);
-    let to_part = |p: DVec3| fr.origin + x * p.x + y * p.y + z * p.z;
-    let to_part2 = |c: DVec2, zz: f64| fr.origin + x * c.x + y * c.y + z * zz;
+    let z = f.shape.frame.z.normalize_or_zero();
+    let to_part2 = |c: DVec2, zz: f64| to_part(f, c, zz);
+    let to_part = |p: DVec3| to_part(f, p.truncate(), p.z);
     let feed = |kind: Kind| match kind {
         Kind::Rest | Kind::FullCut => lo.feed_rough,
         Kind::Boundary => lo.feed_boundary,
