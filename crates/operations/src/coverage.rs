@@ -16,7 +16,7 @@ use thinplan_plan::{Operation, Region3};
 
 use crate::geom::dist_point_seg;
 use crate::links::View;
-use crate::path::arc_sweep;
+use crate::path::{arc_sweep, Kind, LMove};
 
 /// Largest sagitta of the chords an arc is split into (mm).
 const SAGITTA: f64 = 2e-3;
@@ -58,45 +58,76 @@ impl Coverage {
                 .map_or(0.0, |t| 0.5 * t.diameter);
             let mut from = o.start;
             for m in &o.moves {
-                if m.region != Region3::Rapid && r > 0.0 {
+                if m.region != Region3::Rapid {
                     let z = view.z(from).max(view.z(m.to));
-                    let (a, b) = (view.xy(from), view.xy(m.to));
-                    match m.arc {
-                        None => cov.push(a, b, z, r),
-                        Some(arc) => {
-                            let c = view.xy(arc.centre);
-                            let ccw = if arc.axis.dot(view.up()) >= 0.0 {
-                                !arc.clockwise
-                            } else {
-                                arc.clockwise
-                            };
-                            let ra = a.distance(c);
-                            let sweep = arc_sweep(a, b, c, ccw);
-                            // chord angle with sagitta SAGITTA: 2 acos(1 − s/r)
-                            let step = if ra > SAGITTA {
-                                2.0 * (1.0 - SAGITTA / ra).acos()
-                            } else {
-                                std::f64::consts::PI
-                            };
-                            let k = (sweep.abs() / step).ceil().max(1.0) as usize;
-                            let a0 = (a - c).to_angle();
-                            let mut p = a;
-                            for j in 1..=k {
-                                let q = if j == k {
-                                    b
-                                } else {
-                                    c + ra * DVec2::from_angle(a0 + sweep * j as f64 / k as f64)
-                                };
-                                cov.push(p, q, z, r - SAGITTA);
-                                p = q;
-                            }
-                        }
-                    }
+                    let arc = m.arc.map(|arc| {
+                        let ccw = if arc.axis.dot(view.up()) >= 0.0 {
+                            !arc.clockwise
+                        } else {
+                            arc.clockwise
+                        };
+                        (view.xy(arc.centre), ccw)
+                    });
+                    cov.push_move(view.xy(from), view.xy(m.to), arc, z, r);
                 }
                 from = m.to;
             }
         }
         cov
+    }
+
+    /// The cutting moves of operations in a feature's local frame (plan
+    /// view along its z), each with its tool's radius.
+    pub(crate) fn local<'a>(ops: impl IntoIterator<Item = (&'a [LMove], DVec3, f64)>) -> Self {
+        let mut cov = Coverage {
+            view: View::new(DVec3::Z),
+            segs: Vec::new(),
+            grid: BTreeMap::new(),
+        };
+        for (moves, start, r) in ops {
+            let mut from = start;
+            for m in moves {
+                if m.kind != Kind::Rapid {
+                    let z = from.z.max(m.to.z);
+                    cov.push_move(from.truncate(), m.to.truncate(), m.arc, z, r);
+                }
+                from = m.to;
+            }
+        }
+        cov
+    }
+
+    /// A line from `a` to `b`, or an arc about `arc.0` (counter-clockwise
+    /// when `arc.1`), in plan view, its tip at most at `z`.
+    fn push_move(&mut self, a: DVec2, b: DVec2, arc: Option<(DVec2, bool)>, z: f64, r: f64) {
+        if r <= 0.0 {
+            return;
+        }
+        match arc {
+            None => self.push(a, b, z, r),
+            Some((c, ccw)) => {
+                let ra = a.distance(c);
+                let sweep = arc_sweep(a, b, c, ccw);
+                // chord angle with sagitta SAGITTA: 2 acos(1 − s/r)
+                let step = if ra > SAGITTA {
+                    2.0 * (1.0 - SAGITTA / ra).acos()
+                } else {
+                    std::f64::consts::PI
+                };
+                let k = (sweep.abs() / step).ceil().max(1.0) as usize;
+                let a0 = (a - c).to_angle();
+                let mut p = a;
+                for j in 1..=k {
+                    let q = if j == k {
+                        b
+                    } else {
+                        c + ra * DVec2::from_angle(a0 + sweep * j as f64 / k as f64)
+                    };
+                    self.push(p, q, z, r - SAGITTA);
+                    p = q;
+                }
+            }
+        }
     }
 
     fn push(&mut self, a: DVec2, b: DVec2, z: f64, r: f64) {

@@ -2346,12 +2346,25 @@ fn plan_band_with(
     if wall_levels.last().is_none_or(|z| *z > z_min + 1e-9) {
         wall_levels.push(z_min);
     }
+    // What this feature's own passes cut, to find the wall stretches they
+    // left (the centre region alone overstates it where it is too narrow
+    // for a pass).
+    let own_cuts = crate::coverage::Coverage::local(ops.iter().map(|o| {
+        let r = env
+            .tools
+            .tools
+            .iter()
+            .find(|t| t.id == o.tool)
+            .map_or(0.0, |t| 0.5 * t.diameter);
+        (o.moves.as_slice(), o.start, r)
+    }));
     let ctx = RestCtx {
         f,
         m,
         env,
         free,
         removed,
+        own_cuts: &own_cuts,
         tool,
         g: &g,
         z_min,
@@ -2492,6 +2505,8 @@ struct RestCtx<'a> {
     env: &'a Env<'a>,
     free: Option<&'a crate::free::Shapes>,
     removed: Option<&'a crate::free::Shapes>,
+    /// The cutting moves of the feature's own operations (local frame).
+    own_cuts: &'a crate::coverage::Coverage,
     /// The feature's tool and its geometry.
     tool: &'a Tool,
     g: &'a Geometry,
@@ -2660,7 +2675,18 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
                     .iter()
                     .any(|&z| !cov.covers(crate::to_part(c.f, *p, z), g2.r, w.min_left))
             }),
-            _ => e
+            // the feature's tool never came near, or the passes it made
+            // left some of it (a centre region too narrow for a pass)
+            Rest::Wall(w) => {
+                let pts = e.sample(STEP);
+                pts.iter().all(|p| !inside(*p, &beside))
+                    || pts.iter().any(|p| {
+                        c.levels
+                            .iter()
+                            .any(|&z| !c.own_cuts.covers(p.extend(z), g2.r, w.min_left))
+                    })
+            }
+            Rest::Floor(_) => e
                 .sample(STEP)
                 .iter()
                 .all(|p| inside(*p, &beside) == want_inside),

@@ -518,3 +518,62 @@ fn a_drafted_wall_keeps_the_tool_off_its_foot() {
     };
     assert_eq!(moves(&spoilt), moves(&vertical));
 }
+
+/// A cut-out exactly as wide as the largest tool in a 2 mm flange (the
+/// wing rib's stringer cut-outs): the Ø20's centre region across the flange
+/// is a line, so its passes reach in from beside the flange only, and their
+/// discs leave strips along the cut-out's sides at the flange's far faces.
+/// The wall rest pass takes them with the Ø12 inside the cut-out: every
+/// point 0.05 mm from a side, across the flange's thickness, lies within a
+/// tool radius of a cutting move at the floor.
+#[test]
+fn a_cut_out_as_wide_as_the_tool_gets_its_sides_finished() {
+    let f = feature(
+        0,
+        vec![
+            v(140.0, 118.0),
+            v(160.0, 118.0),
+            v(160.0, 120.0),
+            v(140.0, 120.0),
+        ],
+        vec![],
+        vec![
+            Adjacency::Open,
+            Adjacency::Product,
+            Adjacency::Open,
+            Adjacency::Product,
+        ],
+        Adjacency::Product,
+        (23.0, 25.0),
+    );
+    let k = Knowledge::builtin().unwrap();
+    let mut plan = plan_with(vec![f.clone()]);
+    // the flange: product beside the cut-out, air on both sides of it
+    with_blank(&mut plan, [100.0, 118.0, 200.0, 120.0]);
+    let ops = operations(&plan, &k).unwrap();
+    assert!(ops.refusals.is_empty(), "{:?}", ops.refusals);
+    check_product_and_floor(&f, &ops, &k);
+    let z = f.shape.z_min;
+    let mut discs = Vec::new();
+    for op in &ops.operations {
+        let r = radius(&k, op);
+        for w in walk(op, 0.02).windows(2) {
+            let (a, b) = (w[0].0, w[1].0);
+            if is_cutting(w[1].2) && (a.z - z).abs() < 1e-9 && (b.z - z).abs() < 1e-9 {
+                discs.push((a.truncate(), b.truncate(), r));
+            }
+        }
+    }
+    for x in [140.05, 159.95] {
+        for j in 0..=18 {
+            let p = DVec2::new(x, 118.05 + 0.1 * j as f64);
+            let reached = discs
+                .iter()
+                .any(|(a, b, r)| seg_dist(p, *a, *b) <= r + 1e-4);
+            assert!(
+                reached,
+                "the cut-out's side at {p} is never reached at the floor"
+            );
+        }
+    }
+}
