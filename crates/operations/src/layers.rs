@@ -2647,6 +2647,14 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     if cleared.is_empty() {
         return Ok(None);
     }
+    // Run-ups and links stay where the feature's tool cut and where the
+    // smaller tool has room: beside sloped faces the first does not imply
+    // the second (the tools' corner radii meet the face differently).
+    let room = if g2.slopes == Slopes::AsVertical {
+        cleared.clone()
+    } else {
+        intersect_polys(&cleared, &g2.centre_polys)
+    };
     // The floor pass runs where the feature's tool was beside the wall; the
     // wall pass where it stayed more than `min_left` away.
     let (beside, want_inside, run_up) = match rest {
@@ -2743,14 +2751,14 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             if len < STEP {
                 continue;
             }
-            passes.push(boundary_pass(&part, &g2, run_up, d2, &cleared, mk));
+            passes.push(boundary_pass(&part, &g2, run_up, d2, &room, mk));
         }
     }
     if passes.is_empty() {
         return Ok(None);
     }
     let space = Space {
-        centre_region: &cleared,
+        centre_region: &room,
         z_top: c.rapid_floor,
         safe_z: c.safe_z,
         step: STEP,
@@ -2854,6 +2862,25 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
         moves: b.moves,
         provenance: prov,
     }))
+}
+
+/// The part of one set of loops (outer loops and holes, even-odd) inside
+/// another.
+fn intersect_polys(a: &[Vec<DVec2>], b: &[Vec<DVec2>]) -> Vec<Vec<DVec2>> {
+    use i_overlay::core::fill_rule::FillRule;
+    use i_overlay::core::overlay_rule::OverlayRule;
+    use i_overlay::float::single::SingleFloatOverlay;
+    let paths = |p: &[Vec<DVec2>]| -> Vec<Vec<[f64; 2]>> {
+        p.iter()
+            .map(|l| l.iter().map(|q| [q.x, q.y]).collect())
+            .collect()
+    };
+    let out: crate::free::Shapes =
+        paths(a).overlay_as::<i64>(&paths(b), OverlayRule::Intersect, FillRule::EvenOdd);
+    out.into_iter()
+        .flatten()
+        .map(|l| l.into_iter().map(|q| DVec2::new(q[0], q[1])).collect())
+        .collect()
 }
 
 fn spin_sign(s: SpindleDirection) -> f64 {
