@@ -499,12 +499,18 @@ fn has_orphan_stretch(
         .filter(|(_, a)| **a == thinplan_plan::Adjacency::Product)
         .map(|(e, _)| *e)
         .collect();
-    let near_product = |c: DVec2| {
-        product.iter().any(|e| {
-            e.sample(STEP)
-                .windows(2)
-                .any(|w| geom::dist_point_seg(c, w[0], w[1]) < r - 1e-3)
+    // the product edges as chords, sampled once
+    let chords: Vec<(DVec2, DVec2)> = product
+        .iter()
+        .flat_map(|e| {
+            let pts = e.sample(STEP);
+            pts.windows(2).map(|w| (w[0], w[1])).collect::<Vec<_>>()
         })
+        .collect();
+    let near_product = |c: DVec2| {
+        chords
+            .iter()
+            .any(|&(a, b)| geom::dist_point_seg(c, a, b) < r - 1e-3)
     };
     for (k, (es, adj)) in loops.iter().enumerate() {
         // the region lies left of a counter-clockwise outer loop and right
