@@ -2531,6 +2531,18 @@ impl RestCtx<'_> {
     }
 }
 
+/// Points of the disc of radius `r` about `p`: its centre and rings at a
+/// quarter, half, three quarters and (a hair inside) all of `r`, 24 each.
+fn disc_samples(p: DVec2, r: f64) -> impl Iterator<Item = DVec2> {
+    std::iter::once(p).chain((1..=4).flat_map(move |k| {
+        let rho = (0.25 * k as f64 * r - if k == 4 { 1e-3 } else { 0.0 }).max(0.0);
+        (0..24).map(move |j| {
+            let a = std::f64::consts::TAU * j as f64 / 24.0;
+            p + rho * DVec2::new(a.cos(), a.sin())
+        })
+    }))
+}
+
 /// Provenance value (1) of a wall rest pass for orphan stretches
 /// ([`Rest::Orphan`]).
 pub(crate) const ORPHAN: &str = "orphan_stretches";
@@ -2678,10 +2690,24 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     for (chain, _) in boundary_chains(&g2, band, mk.spindle) {
         let ok = |e: &Edge2| match rest {
             // wanted where some sample was not cut round at some level
+            Rest::Orphan(w, cov) if g2.slopes == Slopes::AsVertical => {
+                e.sample(STEP).iter().any(|p| {
+                    c.levels
+                        .iter()
+                        .any(|&z| !cov.covers(crate::to_part(c.f, *p, z), g2.r, w.min_left))
+                })
+            }
+            // Beside sloped faces the disc reaches past open edges, into
+            // air or space other features cleared at their own heights:
+            // only the feature's own material in it counts.
             Rest::Orphan(w, cov) => e.sample(STEP).iter().any(|p| {
-                c.levels
-                    .iter()
-                    .any(|&z| !cov.covers(crate::to_part(c.f, *p, z), g2.r, w.min_left))
+                disc_samples(*p, g2.r)
+                    .filter(|q| inside(*q, &c.g.region_polys))
+                    .any(|q| {
+                        c.levels
+                            .iter()
+                            .any(|&z| !cov.covers(crate::to_part(c.f, q, z), 0.0, w.min_left))
+                    })
             }),
             // the feature's tool never came near, or the passes it made
             // left some of it (a centre region too narrow for a pass)

@@ -414,7 +414,11 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
 /// `min_left` of (at the floor, for the smallest tool's disc touching the
 /// wall where it fits) are planned again for those stretches alone
 /// ([`layers`]' `Rest::Orphan`): the smallest tool with room, every other
-/// feature gone, run last. Features on sloped faces are left out.
+/// feature gone, run last. Features beside sloped faces (slabs of a
+/// rounded or drafted face) are taken where some point of their floor was
+/// left uncut (`has_uncut_floor`); their stretches are judged by the
+/// feature's own material under the disc, which there reaches past open
+/// edges into air.
 fn orphan_stretches(
     plan: &Plan,
     env: &layers::Env,
@@ -431,12 +435,12 @@ fn orphan_stretches(
     else {
         return;
     };
-    let Some(r_s) = env
+    let Some((r_s, rc_s)) = env
         .tools
         .tools
         .iter()
-        .map(|t| 0.5 * t.diameter)
-        .reduce(f64::min)
+        .map(|t| (0.5 * t.diameter, t.corner_radius))
+        .reduce(|a, b| if b.0 < a.0 { b } else { a })
     else {
         return;
     };
@@ -450,8 +454,10 @@ fn orphan_stretches(
     let mut made = Vec::new();
     for (i, f) in plan.machining_features.iter().enumerate() {
         if !with_ops.contains(&(i as u32))
-            || f.slopes.is_some()
-            || !has_orphan_stretch(f, &cov, r_s, min_left)
+            || !match &f.slopes {
+                None => has_orphan_stretch(f, &cov, r_s, min_left),
+                Some(sl) => has_uncut_floor(f, sl, &cov, (r_s, r_s - rc_s), min_left),
+            }
         {
             continue;
         }
@@ -479,6 +485,93 @@ fn orphan_stretches(
         let id = OperationId(out.operations.len() as u32);
         out.operations.push(to_operation(id, f, lo, env));
     }
+}
+
+/// Whether some point of a sloped feature's floor was cut down to its
+/// bottom by no operation, though the smallest tool could stand there: the
+/// region sampled every 0.25 mm, less the band along its product edges
+/// where the sloped faces reach into it at the bottom (the part stands
+/// above the floor there); a point is cut when it lies within `min_left`
+/// of some operation's disc at or below the bottom, and reachable when
+/// some centre within `tool_r` of it keeps the flat bottom (`tool_flat`)
+/// off those faces. A quick test: the feature's full geometry decides
+/// (`layers`' `Rest::Orphan`).
+fn has_uncut_floor(
+    f: &thinplan_plan::MachiningFeature,
+    slopes: &thinplan_plan::EdgeSlopes,
+    cov: &coverage::Coverage,
+    (tool_r, tool_flat): (f64, f64),
+    min_left: f64,
+) -> bool {
+    const STEP: f64 = 0.25;
+    // The points and the centres (5° apart) are sampled coarsely, and the
+    // tool's corner meets a rising face later than its flat bottom: a test
+    // this strict would refuse points the full geometry reaches.
+    const SLACK: f64 = 0.05;
+    let loops = geom::adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
+    let offsets = slopes.side.iter().chain(slopes.holes.iter().flatten());
+    let band = offsets
+        .map(|o| -slopes.beyond(o, f.shape.z_min))
+        .fold(0.0, f64::max);
+    let polys: Vec<Vec<DVec2>> = loops
+        .iter()
+        .map(|(es, _)| es.iter().flat_map(|e| e.sample(STEP)).collect())
+        .collect();
+    // the product edges as chords, each with how far its face reaches
+    // into the region at the bottom
+    let offsets: Vec<&Vec<f64>> = slopes
+        .side
+        .iter()
+        .chain(slopes.holes.iter().flatten())
+        .collect();
+    let product: Vec<(DVec2, DVec2, f64)> = loops
+        .iter()
+        .flat_map(|(es, adj)| es.iter().zip(adj))
+        .enumerate()
+        .filter(|(_, (_, a))| **a == thinplan_plan::Adjacency::Product)
+        .flat_map(|(k, (e, _))| {
+            let grow = offsets
+                .get(k)
+                .map_or(0.0, |o| (-slopes.beyond(o, f.shape.z_min)).max(0.0));
+            let pts = e.sample(STEP);
+            pts.windows(2)
+                .map(|w| (w[0], w[1], grow))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    // Whether the smallest tool could stand at the bottom over `q`: some
+    // centre within its radius of `q` keeps its flat bottom off the faces
+    // there (only those faces: a quick test before the full geometry).
+    let reachable = |q: DVec2| {
+        [tool_r - 1e-3, 0.5 * tool_r].iter().any(|&rho| {
+            (0..72).any(|k| {
+                let a = std::f64::consts::TAU * k as f64 / 72.0;
+                let c = q + rho * DVec2::new(a.cos(), a.sin());
+                product
+                    .iter()
+                    .all(|&(a, b, grow)| geom::dist_point_seg(c, a, b) >= tool_flat + grow - SLACK)
+            })
+        })
+    };
+    let (lo, hi) = polys.iter().flatten().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(l, h), p| (l.min(*p), h.max(*p)),
+    );
+    let (nx, ny) = (
+        ((hi.x - lo.x) / STEP).ceil().max(0.0) as usize,
+        ((hi.y - lo.y) / STEP).ceil().max(0.0) as usize,
+    );
+    (0..=ny).any(|j| {
+        (0..=nx).any(|i| {
+            let q = lo + DVec2::new(i as f64, j as f64) * STEP;
+            geom::inside(q, &polys)
+                && product
+                    .iter()
+                    .all(|&(a, b, _)| geom::dist_point_seg(q, a, b) > band + min_left)
+                && !cov.covers(to_part(f, q, f.shape.z_min), 0.0, min_left)
+                && reachable(q)
+        })
+    })
 }
 
 /// Whether some stretch of `f`'s product walls was not cut round at its

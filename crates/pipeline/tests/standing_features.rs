@@ -6,11 +6,14 @@
 //! operations with geometry computed here (tool centres sampled every
 //! 0.5 mm, point in polygon), not with the crate's own test.
 
+mod common;
+
 use std::collections::BTreeMap;
 
+use common::cutting_centres;
 use glam::{DVec2, DVec3};
 use thinplan_pipeline::{load_knowledge, make_setup, Session, SetupRequest};
-use thinplan_plan::{MachiningFeature, Operation, Region3};
+use thinplan_plan::{MachiningFeature, Operation};
 
 /// How far (mm) a tool centre may lie inside a feature not yet started.
 /// Stage 7 grows a region beyond two non-product edges that meet at a
@@ -56,56 +59,6 @@ fn depth_inside(p: DVec2, f: &MachiningFeature) -> f64 {
         .iter()
         .flat_map(|r| (0..r.len()).map(move |i| dist_seg(p, r[i], r[(i + 1) % r.len()])))
         .fold(f64::INFINITY, f64::min)
-}
-
-/// Tool-centre positions of the cutting moves, every 0.5 mm at most
-/// (arcs about the z axis followed along the arc).
-fn cutting_centres(op: &Operation) -> Vec<DVec3> {
-    let mut out = Vec::new();
-    let mut from = op.start;
-    for m in &op.moves {
-        let cutting = m.feed > 0.0
-            && matches!(
-                m.region,
-                Region3::Boundary | Region3::FullCut | Region3::Rest
-            );
-        if cutting {
-            let pts: Vec<DVec3> = match m.arc {
-                Some(a) if a.axis.z.abs() > 0.999 => {
-                    let c = a.centre;
-                    let (u, v) = (from - c, m.to - c);
-                    let ccw = (a.axis.z > 0.0) != a.clockwise;
-                    let (a0, a1) = (u.y.atan2(u.x), v.y.atan2(v.x));
-                    let mut sweep = if ccw { a1 - a0 } else { a0 - a1 };
-                    if sweep <= 0.0 {
-                        sweep += std::f64::consts::TAU;
-                    }
-                    let rad = u.truncate().length();
-                    let k = ((sweep * rad / 0.5).ceil() as usize).max(1);
-                    (0..=k)
-                        .map(|s| {
-                            let t = s as f64 / k as f64;
-                            let ang = if ccw { a0 + sweep * t } else { a0 - sweep * t };
-                            DVec3::new(
-                                c.x + rad * ang.cos(),
-                                c.y + rad * ang.sin(),
-                                from.z + (m.to.z - from.z) * t,
-                            )
-                        })
-                        .collect()
-                }
-                _ => {
-                    let k = ((from.distance(m.to) / 0.5).ceil() as usize).max(1);
-                    (0..=k)
-                        .map(|s| from.lerp(m.to, s as f64 / k as f64))
-                        .collect()
-                }
-            };
-            out.extend(pts);
-        }
-        from = m.to;
-    }
-    out
 }
 
 #[test]
