@@ -98,7 +98,7 @@ fn an_unknown_block_a_missing_field_and_bad_numbers_are_refused() {
     let d = copy_knowledge("shallow");
     edit(
         &d,
-        "shallow_slabs: Some((along_face: 0.7, min_thickness: 0.05))",
+        "shallow_slabs: Some((along_face: 0.5, min_thickness: 0.05))",
         "shallow_slabs: Some((along_face: 0.0, min_thickness: 0.6))",
     );
     let e = errors(&d);
@@ -110,7 +110,7 @@ fn an_unknown_block_a_missing_field_and_bad_numbers_are_refused() {
     let d = copy_knowledge("no-shallow");
     edit(
         &d,
-        "shallow_slabs: Some((along_face: 0.7, min_thickness: 0.05)),",
+        "shallow_slabs: Some((along_face: 0.5, min_thickness: 0.05)),",
         "",
     );
     let k = Knowledge::load_dir(&d).expect("loads without it");
