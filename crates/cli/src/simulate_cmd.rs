@@ -151,6 +151,11 @@ fn summary(part: &str, prog: &str, r: &StockReport) -> String {
     defect("gouges", &r.gouges, &mut s);
     defect("leftover, missed", &r.leftover_missed, &mut s);
     defect("leftover, unreachable", &r.leftover_unreachable, &mut s);
+    defect(
+        "leftover, above reach (part unreachable, top shavable)",
+        &r.leftover_above_reach,
+        &mut s,
+    );
     for w in &r.warnings {
         let _ = writeln!(s, "  warning: {w}");
     }

@@ -464,9 +464,13 @@ fn plan_json_machining_features_follow_the_contract() {
     }
 }
 
-/// Material (mm³) the stock simulation may still find missed per sample,
-/// beyond the 0.05 mm tolerance, and why (issue 5: the final stock equals
-/// the part except where no tool reaches). Before the stage-7 fixes of
+/// Material (mm³) the stock simulation may find above reach per sample
+/// (`leftover_above_reach`: where no tool reaches the part, what a tool
+/// could still have taken off the top), and why. Missed material (where a
+/// tool reaches the part) must be none on every sample: issue 5's bar, the
+/// final stock equals the part within 0.05 mm except where no tool can
+/// reach. Until the thirteenth session both were one figure, "missed",
+/// which the values in the reasons below are. Before the stage-7 fixes of
 /// this list: crossing_ribs 642 000, tall_rib 68 624, chamfered_rib 68 646,
 /// isogrid 60 211, wall_holes 57 862, wing_rib 5 758, flange_cutouts 165,
 /// flange_web_slot 49, pentagon_pocket 2. Before the rest pass
@@ -474,12 +478,12 @@ fn plan_json_machining_features_follow_the_contract() {
 /// 10.5, crossing_ribs 728, flange_cutouts 131, flange_web_slot 49,
 /// isogrid 2961, wing_rib 507. Debug and release builds give the same plan
 /// bytes (checked on isogrid at 5f06411).
-const MISSED_ALLOWANCE: &[(&str, f64, &str)] = &[
+const ABOVE_REACH_ALLOWANCE: &[(&str, f64, &str)] = &[
     ("chamfered_rib", 0.1, "nothing left (measured 0.0 with the boundary pass following the chamfer; 1.9 with `sloped_faces: AsVertical`, bands every slab where em20's corner radius stood off the 45° face)"),
     ("crossing_ribs", 0.1, "nothing left (measured 0.0; 23.8 while the floor rest pass was refused along a whole wall for its last millimetres, 656.8 while the simulation's reach spilled past the tools' limits)"),
-    ("flange_cutouts", 0.1, "the cut-outs' round bottoms (R8 in a 2 mm flange), reached from beside the flange by a tool wider than the gap: one speck of 0.06 mm where the slabs' terraces meet mid-flange (measured 0.02 with `shallow_slabs.along_face` 0.5; 0.11 with 0.7, ridges up to 0.10 mm, and stage 7's second pass taking the slabs whose floor no operation cut down to again from the flange's inner side; 0.76 before, a 0.24 mm patch by the lowest point of two cut-outs, whose slabs come before the web's pocket beyond y = 13 in stage 7's order and so were reached from the flange's outer side alone; 0.76 with the wall rest passes judged by the cuts made as well as the centre region; 0.93 with the product swept at every height of the corner radius; 9.4 with one shift per edge, conservative where the tool pivots about the flange's ends; 6.2 with the faces taken as vertical in 0.5 mm slabs, 16.0 measured down to the part rather than to what a tool reaches, 30.4 with the spilling reach, 157 before the wall rest pass)"),
+    ("flange_cutouts", 0.05, "the cut-outs' round bottoms (R8 in a 2 mm flange), reached from beside the flange by a tool wider than the gap, where no flat bottom reaches the part mid-flange: one cell of 0.057 mm at each of four places where the slabs' terraces meet mid-flange (measured 0.018 above reach and none missed; before the split 0.02 missed with `shallow_slabs.along_face` 0.5; 0.11 with 0.7, ridges up to 0.10 mm, and stage 7's second pass taking the slabs whose floor no operation cut down to again from the flange's inner side; 0.76 before, a 0.24 mm patch by the lowest point of two cut-outs, whose slabs come before the web's pocket beyond y = 13 in stage 7's order and so were reached from the flange's outer side alone; 0.76 with the wall rest passes judged by the cuts made as well as the centre region; 0.93 with the product swept at every height of the corner radius; 9.4 with one shift per edge, conservative where the tool pivots about the flange's ends; 6.2 with the faces taken as vertical in 0.5 mm slabs, 16.0 measured down to the part rather than to what a tool reaches, 30.4 with the spilling reach, 157 before the wall rest pass)"),
     ("flange_web_slot", 0.1, "nothing left (measured 0.0; 0.06 with the spilling reach)"),
-    ("isogrid", 0.6, "specks of one to three cells at rib ends: one-cell shavings of the unreachable R5 corners' tops at the ribs (measured 0.43; 0.45 before stage 7's second pass finished the wall stretches no operation came beside, a 0.2 mm cusp where two features' passes stopped short of each other; 7.2 before the wall rest pass with the feature's own tool after every feature took a 35-cell column beside a pocket's rib end, 45.4 measured down to the part rather than to what a tool reaches — columns no tool reaches whose tops a tool could shave by 0.1 mm — 64.7 before the floor rest pass ran along partial walls, 967.5 with the spilling reach)"),
+    ("isogrid", 0.6, "one-cell shavings, up to 0.11 mm, off the tops of the R5 pocket corners no tool reaches: the simulation's ideal lets the Ø12's corner radius shave the columns' rims, which the plan's level passes never do (measured 0.43 above reach and none missed; before the split 0.43 missed; 0.45 before stage 7's second pass finished the wall stretches no operation came beside, a 0.2 mm cusp where two features' passes stopped short of each other; 7.2 before the wall rest pass with the feature's own tool after every feature took a 35-cell column beside a pocket's rib end, 45.4 measured down to the part rather than to what a tool reaches — columns no tool reaches whose tops a tool could shave by 0.1 mm — 64.7 before the floor rest pass ran along partial walls, 967.5 with the spilling reach)"),
     ("pentagon_pocket", 0.1, "nothing left (measured 0.0; 0.27 with the spilling reach)"),
     ("tall_rib", 0.0, "nothing left (measured 0.0)"),
     ("wall_holes", 0.1, "nothing left (measured 0.0)"),
@@ -536,7 +540,8 @@ fn plan_and_simulate(name: &str, d: &Path, tag: &str, extra: &[&str]) -> (Vec<u8
 }
 
 /// The whole pipeline to G-code, replayed by the independent stock
-/// simulation: no gouge, no rapid into stock, missed material within the
+/// simulation: no gouge, no rapid into stock, no missed material (none
+/// where a tool reaches the part), material above reach within the
 /// sample's allowance, and every feature stage 7 gives no operation is
 /// reported as unreachable (rule `operations.unreachable`, with the reason).
 fn assert_machined(names: &[&str]) {
@@ -544,8 +549,14 @@ fn assert_machined(names: &[&str]) {
         let d = tmp(&format!("gcode-{name}"));
         let (_, plan, v) = plan_and_simulate(name, &d, "p", &[]);
         assert!(v["removed_volume_mm3"].as_f64().unwrap() > 0.0);
-        let missed = v["leftover_missed"]["volume_mm3"].as_f64().unwrap();
-        let (allowed, why) = MISSED_ALLOWANCE
+        // Where a tool reaches the part, the stock is the part.
+        assert_eq!(
+            v["leftover_missed"]["cells"], 0,
+            "{name}: leftover a tool reaches the part under: {}",
+            v["leftover_missed"]
+        );
+        let above = v["leftover_above_reach"]["volume_mm3"].as_f64().unwrap();
+        let (allowed, why) = ABOVE_REACH_ALLOWANCE
             .iter()
             .find(|(n, _, _)| *n == name)
             .map(|(_, a, w)| (*a, *w))
@@ -554,9 +565,9 @@ fn assert_machined(names: &[&str]) {
                 "no allowance: a new sample must leave nothing a tool reaches",
             ));
         assert!(
-            missed <= allowed,
-            "{name}: {missed:.1} mm³ missed > {allowed} allowed ({why}); regions {}",
-            v["leftover_missed"]["regions"]
+            above <= allowed,
+            "{name}: {above:.2} mm³ above reach > {allowed} allowed ({why}); regions {}",
+            v["leftover_above_reach"]["regions"]
         );
         // Feed moves that cut nothing: at most AIR_SHARE_MAX of the feed
         // length (the simulation's own measure).
@@ -598,10 +609,11 @@ fn assert_machined(names: &[&str]) {
         // simulation calls unreachable only what none of the program's
         // tools reaches from above at any point, so part of what the plan
         // reports (corners and whole features, judged by each feature's own
-        // tool-centre region) it counts as missed instead; and it counts the
-        // smallest tool's corner-radius fillet and cells at the walls that
-        // the plan does not estimate. Hence the plan lies between the
-        // simulation's unreachable and unreachable + missed, within a slack
+        // tool-centre region) it counts as above reach instead (missed is
+        // none, asserted above); and it counts the smallest tool's
+        // corner-radius fillet and cells at the walls that the plan does not
+        // estimate. Hence the plan lies between the simulation's unreachable
+        // and unreachable + above reach, within a slack
         // of 40 mm³ + 15 % either way. Below: the simulation's unreachable
         // includes the crescents at each tool's reach limit in sharp
         // corners and its corner radius's fillet along walls, which the plan
@@ -615,9 +627,9 @@ fn assert_machined(names: &[&str]) {
         let unreach = v["leftover_unreachable"]["volume_mm3"].as_f64().unwrap();
         let slack = 40.0 + 0.15 * reported;
         assert!(
-            reported >= unreach - slack && reported <= unreach + missed + slack,
+            reported >= unreach - slack && reported <= unreach + above + slack,
             "{name}: the plan reports {reported:.1} mm³ unreachable, the simulation \
-             {unreach:.1} unreachable + {missed:.1} missed"
+             {unreach:.1} unreachable + {above:.2} above reach"
         );
     }
 }
@@ -969,6 +981,7 @@ fn links_on_the_in_process_stock_run_lower_and_never_into_stock() {
     for (a, b) in [
         ("leftover_missed", "volume_mm3"),
         ("leftover_unreachable", "volume_mm3"),
+        ("leftover_above_reach", "volume_mm3"),
     ] {
         assert!(
             (num(low, a, b) - num(high, a, b)).abs() < 1e-6,

@@ -273,14 +273,22 @@ pub enum CellClass {
     Ok,
     /// Stock below the part by more than the tolerance.
     Gouge,
-    /// Stock above the part that one of the program's tools could have removed.
+    /// Stock above the part that one of the program's tools could have
+    /// removed down to the part.
     Missed,
     /// Stock above the part that none of the program's tools can reach.
     Unreachable,
+    /// Stock above what the program's tools could leave, where none of them
+    /// reaches the part: the part is unreachable there, and a tool could
+    /// only have taken some off the top (the rim of a column in a corner no
+    /// tool fits, a ridge on a face no flat bottom follows).
+    AboveReach,
 }
 
 /// Classifies every cell: a gouge below the part's `lo` − tol, leftover
-/// above its `hi` + tol (see [`PartField`]), missed when also above the ideal.
+/// above its `hi` + tol (see [`PartField`]); leftover above the ideal + tol
+/// is missed where the ideal comes within tol of the part, else above
+/// reach.
 pub fn classify(stock: &[f32], part: &PartField, ideal: &[f32], tol: f64) -> Vec<CellClass> {
     stock
         .iter()
@@ -291,10 +299,12 @@ pub fn classify(stock: &[f32], part: &PartField, ideal: &[f32], tol: f64) -> Vec
             if s < lo - tol {
                 CellClass::Gouge
             } else if s > hi + tol {
-                if s > id + tol {
+                if s <= id + tol {
+                    CellClass::Unreachable
+                } else if id <= hi + tol {
                     CellClass::Missed
                 } else {
-                    CellClass::Unreachable
+                    CellClass::AboveReach
                 }
             } else {
                 CellClass::Ok

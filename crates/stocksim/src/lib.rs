@@ -103,7 +103,8 @@ pub const MAX_REGIONS: usize = 20;
 /// only on the inputs.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StockReport {
-    /// No gouge, no missed leftover, no crash.
+    /// No gouge, no missed leftover, no crash (leftover where no tool
+    /// reaches the part, unreachable or above reach, is reported only).
     pub clean: bool,
     pub cell_mm: f64,
     pub tolerance_mm: f64,
@@ -115,8 +116,14 @@ pub struct StockReport {
     pub air_cutting: AirCutting,
     pub crashes: Vec<Crash>,
     pub gouges: DefectSummary,
+    /// Leftover a tool could have taken down to the part.
     pub leftover_missed: DefectSummary,
+    /// Leftover where no tool reaches the part, measured down to the part.
     pub leftover_unreachable: DefectSummary,
+    /// Leftover where no tool reaches the part but one could have taken
+    /// some off the top ([`CellClass::AboveReach`]): measured down to what
+    /// the tools could leave, as missed leftover is.
+    pub leftover_above_reach: DefectSummary,
     /// Cells evaluated under the tool during the replay (a work measure).
     pub cells_visited: u64,
     pub cells_lowered: u64,
@@ -210,9 +217,9 @@ pub fn simulate(
         best
     };
     let classes = compare::classify(&stock.top, &field, &ideal, cfg.tol);
-    // Missed material is measured down to what the tools could have
-    // reached, not to the part: a column no tool reaches whose top a tool
-    // could have shaved counts the shaving only.
+    // Missed and above-reach material is measured down to what the tools
+    // could have reached, not to the part: a column no tool reaches whose
+    // top a tool could have shaved counts the shaving only (above reach).
     let reachable: Vec<f32> = ideal
         .iter()
         .zip(&part_top)
@@ -223,7 +230,7 @@ pub fn simulate(
             &classes,
             class,
             &stock.top,
-            if class == CellClass::Missed {
+            if matches!(class, CellClass::Missed | CellClass::AboveReach) {
                 &reachable
             } else {
                 &part_top
@@ -253,6 +260,7 @@ pub fn simulate(
     let gouges = summary(CellClass::Gouge);
     let missed = summary(CellClass::Missed);
     let unreachable = summary(CellClass::Unreachable);
+    let above_reach = summary(CellClass::AboveReach);
     let compare_time = t1.elapsed();
 
     let tool_uses = rs
@@ -294,6 +302,7 @@ pub fn simulate(
         gouges,
         leftover_missed: missed,
         leftover_unreachable: unreachable,
+        leftover_above_reach: above_reach,
         cells_visited: rs.cut.visited,
         cells_lowered: rs.cut.lowered,
         warnings,

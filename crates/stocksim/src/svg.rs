@@ -10,16 +10,18 @@ use crate::Simulation;
 const GOUGE: &str = "#d62728";
 const MISSED: &str = "#ff7f0e";
 const UNREACHABLE: &str = "#1f77b4";
+const ABOVE_REACH: &str = "#9467bd";
 
 /// The top view: gouges red, missed leftover orange, unreachable leftover
-/// blue, good cells grey by part height (lighter = higher), through cells
+/// blue, leftover above what a tool reaches where none reaches the part
+/// purple, good cells grey by part height (lighter = higher), through cells
 /// (no part) white.
 pub fn top_view(sim: &Simulation) -> String {
     let g = &sim.stock.grid;
     let (w_mm, h_mm) = (g.nx as f64 * g.cell, g.ny as f64 * g.cell);
     let scale = 800.0 / w_mm.max(h_mm).max(1e-9);
     let (w, h) = (w_mm * scale, h_mm * scale);
-    let legend = 80.0;
+    let legend = 98.0;
     let zlo = sim.stock.blank.min.z as f32;
     let zhi = sim.stock.blank.max.z as f32;
     let colour = |k: usize| -> String {
@@ -27,6 +29,7 @@ pub fn top_view(sim: &Simulation) -> String {
             CellClass::Gouge => GOUGE.into(),
             CellClass::Missed => MISSED.into(),
             CellClass::Unreachable => UNREACHABLE.into(),
+            CellClass::AboveReach => ABOVE_REACH.into(),
             CellClass::Ok => {
                 let p = sim.part[k];
                 if p <= zlo + 1e-4 {
@@ -102,25 +105,34 @@ pub fn top_view(sim: &Simulation) -> String {
                 r.leftover_unreachable.cells, r.leftover_unreachable.volume_mm3
             ),
         ),
+        (
+            ABOVE_REACH,
+            format!(
+                "above reach: {} cells, {:.2} mm³",
+                r.leftover_above_reach.cells, r.leftover_above_reach.volume_mm3
+            ),
+        ),
     ];
+    // Two rows of two: the counts make the texts long.
     for (k, (col, text)) in items.iter().enumerate() {
-        let x = 10.0 + k as f64 * (w / 3.0).max(180.0);
+        let x = 10.0 + (k % 2) as f64 * (w / 2.0).max(300.0);
+        let y = ly + (k / 2) as f64 * 18.0;
         let _ = writeln!(
             s,
-            r#"<rect x="{x:.1}" y="{ly:.1}" width="12" height="12" fill="{col}"/>"#
+            r#"<rect x="{x:.1}" y="{y:.1}" width="12" height="12" fill="{col}"/>"#
         );
         let _ = writeln!(
             s,
             r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="12">{}</text>"#,
             x + 16.0,
-            ly + 11.0,
+            y + 11.0,
             text
         );
     }
     let _ = writeln!(
         s,
         r#"<text x="10" y="{:.1}" font-family="sans-serif" font-size="12">cell {} mm, tol {} mm, feed {:.0} mm, rapid {:.0} mm, air {:.1} %, removed {:.0} mm³</text>"#,
-        ly + 30.0,
+        ly + 48.0,
         r.cell_mm,
         r.tolerance_mm,
         r.program.feed_length_mm,
@@ -131,7 +143,7 @@ pub fn top_view(sim: &Simulation) -> String {
     let _ = writeln!(
         s,
         r#"<text x="10" y="{:.1}" font-family="sans-serif" font-size="12">grey: within tolerance (lighter = higher part); white: through (no part)</text>"#,
-        ly + 48.0
+        ly + 66.0
     );
     s.push_str("</svg>\n");
     s

@@ -226,3 +226,39 @@ fn builtin_part_and_empty_program() {
     assert_eq!(s.report.removed_volume_mm3, 0.0);
     assert_eq!(s.report.program.feed_length_mm, 0.0);
 }
+
+/// The classes by hand: leftover a tool could take down to the part is
+/// missed; where no tool reaches the part, leftover a tool could still
+/// take some off the top of is above reach, and the rest unreachable.
+#[test]
+fn leftover_is_missed_only_where_a_tool_reaches_the_part() {
+    use thinplan_stocksim::compare::{classify, PartField};
+    // (stock, part, ideal, expected)
+    let cells = [
+        (1.0, 1.0, 1.0, CellClass::Ok),
+        (1.04, 1.0, 1.0, CellClass::Ok),
+        (0.9, 1.0, 1.0, CellClass::Gouge),
+        (2.0, 1.0, 1.02, CellClass::Missed),
+        (2.0, 1.0, 1.0, CellClass::Missed),
+        (5.0, 1.0, 5.0, CellClass::Unreachable),
+        (5.0, 1.0, 4.97, CellClass::Unreachable),
+        // the rim of a column in a corner no tool fits: 0.11 shavable
+        (5.0, 1.0, 4.89, CellClass::AboveReach),
+        // a ridge on a face no flat bottom follows
+        (1.4, 1.0, 1.3, CellClass::AboveReach),
+    ];
+    let f = |k: usize| {
+        cells
+            .iter()
+            .map(|c| [c.0, c.1, c.2][k] as f32)
+            .collect::<Vec<_>>()
+    };
+    let part = PartField {
+        top: f(1),
+        lo: f(1),
+        hi: f(1),
+    };
+    let got = classify(&f(0), &part, &f(2), 0.05);
+    let want: Vec<CellClass> = cells.iter().map(|c| c.3).collect();
+    assert_eq!(got, want);
+}
