@@ -509,8 +509,13 @@ fn has_uncut_floor(
     // this strict would refuse points the full geometry reaches.
     const SLACK: f64 = 0.05;
     let loops = geom::adjacency_edges(&f.shape.region, &f.side_adjacency, &f.hole_adjacency);
-    let offsets = slopes.side.iter().chain(slopes.holes.iter().flatten());
+    let offsets: Vec<&Vec<f64>> = slopes
+        .side
+        .iter()
+        .chain(slopes.holes.iter().flatten())
+        .collect();
     let band = offsets
+        .iter()
         .map(|o| -slopes.beyond(o, f.shape.z_min))
         .fold(0.0, f64::max);
     let polys: Vec<Vec<DVec2>> = loops
@@ -519,11 +524,6 @@ fn has_uncut_floor(
         .collect();
     // the product edges as chords, each with how far its face reaches
     // into the region at the bottom
-    let offsets: Vec<&Vec<f64>> = slopes
-        .side
-        .iter()
-        .chain(slopes.holes.iter().flatten())
-        .collect();
     let product: Vec<(DVec2, DVec2, f64)> = loops
         .iter()
         .flat_map(|(es, adj)| es.iter().zip(adj))
@@ -563,12 +563,13 @@ fn has_uncut_floor(
     );
     (0..=ny).any(|j| {
         (0..=nx).any(|i| {
+            // the cheap test first: most points of a feature were cut
             let q = lo + DVec2::new(i as f64, j as f64) * STEP;
-            geom::inside(q, &polys)
+            !cov.covers(to_part(f, q, f.shape.z_min), 0.0, min_left)
+                && geom::inside(q, &polys)
                 && product
                     .iter()
                     .all(|&(a, b, _)| geom::dist_point_seg(q, a, b) > band + min_left)
-                && !cov.covers(to_part(f, q, f.shape.z_min), 0.0, min_left)
                 && reachable(q)
         })
     })
