@@ -96,6 +96,12 @@ impl Edge2 {
         }
     }
 
+    /// The edge as chords between its samples every `step` (see
+    /// [`Edge2::sample`]).
+    pub fn chords(&self, step: f64) -> Vec<(DVec2, DVec2)> {
+        self.sample(step).windows(2).map(|w| (w[0], w[1])).collect()
+    }
+
     /// Points along the edge, no chord longer than `step` (end points included).
     pub fn sample(&self, step: f64) -> Vec<DVec2> {
         match self.arc() {

@@ -514,10 +514,6 @@ fn has_uncut_floor(
         .iter()
         .chain(slopes.holes.iter().flatten())
         .collect();
-    let band = offsets
-        .iter()
-        .map(|o| -slopes.beyond(o, f.shape.z_min))
-        .fold(0.0, f64::max);
     let polys: Vec<Vec<DVec2>> = loops
         .iter()
         .map(|(es, _)| es.iter().flat_map(|e| e.sample(STEP)).collect())
@@ -533,12 +529,10 @@ fn has_uncut_floor(
             let grow = offsets
                 .get(k)
                 .map_or(0.0, |o| (-slopes.beyond(o, f.shape.z_min)).max(0.0));
-            let pts = e.sample(STEP);
-            pts.windows(2)
-                .map(|w| (w[0], w[1], grow))
-                .collect::<Vec<_>>()
+            e.chords(STEP).into_iter().map(move |(a, b)| (a, b, grow))
         })
         .collect();
+    let band = product.iter().map(|c| c.2).fold(0.0, f64::max);
     // Whether the smallest tool could stand at the bottom over `q`: some
     // centre within its radius of `q` keeps its flat bottom off the faces
     // there (only those faces: a quick test before the full geometry).
@@ -594,13 +588,7 @@ fn has_orphan_stretch(
         .map(|(e, _)| *e)
         .collect();
     // the product edges as chords, sampled once
-    let chords: Vec<(DVec2, DVec2)> = product
-        .iter()
-        .flat_map(|e| {
-            let pts = e.sample(STEP);
-            pts.windows(2).map(|w| (w[0], w[1])).collect::<Vec<_>>()
-        })
-        .collect();
+    let chords: Vec<(DVec2, DVec2)> = product.iter().flat_map(|e| e.chords(STEP)).collect();
     let near_product = |c: DVec2| {
         chords
             .iter()
