@@ -6,6 +6,7 @@ use std::collections::{HashMap, HashSet};
 use glam::{DMat4, DVec3};
 use thinplan_brep::{Brep, Coedge, Curve, Edge, EdgeId, Face, Frame, Loop, Shell, Solid, Surface};
 
+use crate::check::{self, Expect};
 use crate::p21::{Entity, Exchange, Part, Value};
 use crate::{Limits, Place, StepErrorKind};
 
@@ -54,6 +55,40 @@ struct Geo {
     edges: HashMap<usize, EdgeId>,
     poly_vertices: HashMap<usize, usize>,
     poly_edges: HashMap<(usize, usize), EdgeId>,
+    /// Per B-rep edge, the entity ids it was read from (for messages).
+    edge_src: Vec<EdgeSrc>,
+    /// Per B-rep face, the id of its `ADVANCED_FACE` / `FACE_SURFACE`.
+    face_src: Vec<u64>,
+}
+
+/// Where a B-rep edge came from.
+#[derive(Debug, Clone, Copy)]
+enum EdgeSrc {
+    Curve(u64),
+    /// A `POLY_LOOP` side between two points.
+    Poly(u64, u64),
+}
+
+/// Names B-rep pieces by the file's entity ids.
+struct FileNames<'g> {
+    edges: &'g [EdgeSrc],
+    faces: &'g [u64],
+}
+
+impl check::Names for FileNames<'_> {
+    fn edge(&self, e: EdgeId) -> String {
+        match self.edges.get(e) {
+            Some(EdgeSrc::Curve(id)) => format!("#{id}"),
+            Some(EdgeSrc::Poly(a, b)) => format!("#{a}-#{b} (a POLY_LOOP side)"),
+            None => format!("{e} (internal)"),
+        }
+    }
+    fn face(&self, f: usize) -> String {
+        match self.faces.get(f) {
+            Some(id) => format!("#{id}"),
+            None => format!("{f} (internal)"),
+        }
+    }
 }
 
 impl Geo {
@@ -66,6 +101,8 @@ impl Geo {
             edges: HashMap::new(),
             poly_vertices: HashMap::new(),
             poly_edges: HashMap::new(),
+            edge_src: Vec::new(),
+            face_src: Vec::new(),
         }
     }
 }
@@ -255,6 +292,8 @@ struct Ctx<'x, 'a> {
     path: Vec<usize>,
     geo: Geo,
     unit_cache: HashMap<usize, Units>,
+    /// Why each shell outside a solid is not closed (file order).
+    open_shells: Vec<StepErrorKind>,
 }
 
 const SOLID_TYPES: [&str; 3] = ["MANIFOLD_SOLID_BREP", "BREP_WITH_VOIDS", "FACETED_BREP"];
@@ -515,6 +554,11 @@ impl<'x, 'a> Ctx<'x, 'a> {
             out.extend(std::iter::repeat_n(knot, mult));
         }
         self.tick(out.len() as u64, a.idx)?;
+        // Evaluation searches the knots by bisection, which decreasing knots
+        // would send round for ever.
+        if out.windows(2).any(|w| w[1] < w[0]) {
+            return Err(a.wrong("knots decrease"));
+        }
         if out.len() != n_expected {
             let id = self.ent(a.idx).map(|e| e.id).unwrap_or(0);
             self.warn(
@@ -858,6 +902,8 @@ impl<'x, 'a> Ctx<'x, 'a> {
             curve,
             same_sense: same_sense ^ reversed,
         });
+        let id = self.ent(idx).map(|x| x.id).unwrap_or(0);
+        self.geo.edge_src.push(EdgeSrc::Curve(id));
         self.geo.edges.insert(idx, e);
         Ok(e)
     }
@@ -943,6 +989,9 @@ impl<'x, 'a> Ctx<'x, 'a> {
                                 curve: Curve::Line { origin: ps, dir },
                                 same_sense: true,
                             });
+                            let id = |i: usize| self.ent(i).map(|x| x.id).unwrap_or(0);
+                            let src = EdgeSrc::Poly(id(key.0), id(key.1));
+                            self.geo.edge_src.push(src);
                             self.geo.poly_edges.insert(key, e);
                             e
                         }
@@ -979,6 +1028,8 @@ impl<'x, 'a> Ctx<'x, 'a> {
                     let l = self.lp(ba.r(1)?, outer, orientation)?;
                     loops.push(self.geo.brep.add_loop(l));
                 }
+                let id = self.ent(idx).map(|x| x.id).unwrap_or(0);
+                self.geo.face_src.push(id);
                 Ok(self.geo.brep.add_face(Face {
                     surface,
                     same_sense,
@@ -994,9 +1045,7 @@ impl<'x, 'a> Ctx<'x, 'a> {
                 self.leave(idx);
                 let f = f?;
                 if !orientation {
-                    if let Some(face) = self.geo.brep.faces.get_mut(f) {
-                        face.same_sense = !face.same_sense;
-                    }
+                    self.reverse_face(f);
                 }
                 Ok(f)
             }
@@ -1004,18 +1053,58 @@ impl<'x, 'a> Ctx<'x, 'a> {
         }
     }
 
-    /// Builds a shell; returns its id. Oriented shells flip their faces.
-    fn shell(&mut self, idx: usize, from: usize) -> R<usize> {
+    /// Turns a face over: its normal and its bounds (`ORIENTED_FACE(.F.)`).
+    fn reverse_face(&mut self, f: usize) {
+        let b = &mut self.geo.brep;
+        if let Some(face) = b.faces.get_mut(f) {
+            face.same_sense = !face.same_sense;
+            for &l in &face.loops {
+                if let Some(lp) = b.loops.get_mut(l) {
+                    lp.orientation = !lp.orientation;
+                }
+            }
+        }
+    }
+
+    /// Builds a shell; returns its id and the `CLOSED_SHELL` / `OPEN_SHELL`
+    /// entity it came from. Oriented shells turn their faces over.
+    fn shell(&mut self, idx: usize, from: usize) -> R<(usize, usize)> {
         self.tick(1, idx)?;
         let a = self.args(idx);
         match self.head(idx) {
             "CLOSED_SHELL" | "OPEN_SHELL" => {
                 let closed = a.ty == "CLOSED_SHELL";
                 let mut faces = Vec::new();
+                let mut seen = HashSet::new();
+                let mut repeated = Vec::new();
                 for f in a.refs(1)? {
+                    // The same face listed twice is an exporter's slip: the
+                    // copy would use every edge of the face twice more.
+                    if !seen.insert(f) {
+                        repeated.push(f);
+                        continue;
+                    }
                     faces.push(self.face(f, idx)?);
                 }
-                Ok(self.geo.brep.add_shell(Shell { faces, closed }))
+                if !repeated.is_empty() {
+                    let id = |i: usize| self.ent(i).map(|e| e.id).unwrap_or(0);
+                    let mut ids: Vec<String> = repeated
+                        .iter()
+                        .take(10)
+                        .map(|&f| format!("#{}", id(f)))
+                        .collect();
+                    if repeated.len() > 10 {
+                        ids.push(format!("and {} more", repeated.len() - 10));
+                    }
+                    let shell_id = id(idx);
+                    self.warnings.push(format!(
+                        "#{shell_id} {}: face{} {} listed twice; the repeat dropped",
+                        a.ty,
+                        if repeated.len() == 1 { "" } else { "s" },
+                        ids.join(", ")
+                    ));
+                }
+                Ok((self.geo.brep.add_shell(Shell { faces, closed }), idx))
             }
             "ORIENTED_CLOSED_SHELL" | "ORIENTED_OPEN_SHELL" => {
                 let element = a.r(2)?;
@@ -1023,32 +1112,88 @@ impl<'x, 'a> Ctx<'x, 'a> {
                 self.enter(idx, from)?;
                 let s = self.shell(element, idx);
                 self.leave(idx);
-                let s = s?;
+                let (s, inner) = s?;
                 if !orientation {
                     let faces = self.geo.brep.shells[s].faces.clone();
                     for f in faces {
-                        if let Some(face) = self.geo.brep.faces.get_mut(f) {
-                            face.same_sense = !face.same_sense;
-                        }
+                        self.reverse_face(f);
                     }
                 }
-                Ok(s)
+                Ok((s, inner))
             }
             _ => Err(self.bad_kind(idx, &["CLOSED_SHELL", "OPEN_SHELL"], "a shell")),
+        }
+    }
+
+    /// Runs the closed-solid checks on a shell; repairs become warnings.
+    /// `owner` is the solid or surface model holding it (for messages).
+    fn check_shell(&mut self, shell: usize, entity: usize, owner: usize, expect: Expect) -> R<()> {
+        self.tick(check::work(&self.geo.brep, shell), entity)?;
+        let names = FileNames {
+            edges: &self.geo.edge_src,
+            faces: &self.geo.face_src,
+        };
+        let what = self.shell_label(entity, owner);
+        match check::check_shell(&mut self.geo.brep, shell, expect, &names) {
+            Ok(ws) => {
+                let place = place_of(self.ex, entity);
+                for w in ws {
+                    self.warnings.push(format!("{place} {what}: {w}"));
+                }
+                Ok(())
+            }
+            Err(reason) => Err(StepErrorKind::NotClosed {
+                place: place_of(self.ex, entity),
+                entity: what,
+                reason,
+            }),
+        }
+    }
+
+    /// `CLOSED_SHELL of MANIFOLD_SOLID_BREP #159`.
+    fn shell_label(&self, entity: usize, owner: usize) -> String {
+        let id = self.ent(owner).map(|e| e.id).unwrap_or(0);
+        let head = self.type_label(entity);
+        if owner == entity {
+            head
+        } else {
+            format!("{head} of {} #{id}", self.type_label(owner))
         }
     }
 
     fn solid(&mut self, idx: usize) -> R<()> {
         let a = self.args(idx);
         let name = a.string(0);
-        let mut shells = vec![self.shell(a.r(1)?, idx)?];
+        let (outer, entity) = self.shell(a.r(1)?, idx)?;
+        self.check_shell(outer, entity, idx, Expect::Outward)?;
+        let mut shells = vec![outer];
         if a.ty == "BREP_WITH_VOIDS" {
             for v in a.refs(2)? {
-                shells.push(self.shell(v, idx)?);
+                let (void, entity) = self.shell(v, idx)?;
+                self.check_shell(void, entity, idx, Expect::Inward)?;
+                shells.push(void);
             }
         }
         self.geo.brep.add_solid(Solid { shells, name });
         Ok(())
+    }
+
+    /// A shell outside any solid: kept, and marked closed when it closes.
+    /// An open one is remembered; a file with nothing else is refused.
+    fn loose_shell(&mut self, s: usize, entity: usize, owner: usize) -> R<()> {
+        let mark = self.warnings.len();
+        match self.check_shell(s, entity, owner, Expect::Outward) {
+            Ok(()) => {
+                self.geo.brep.shells[s].closed = true;
+                Ok(())
+            }
+            Err(e @ StepErrorKind::NotClosed { .. }) => {
+                self.warnings.truncate(mark);
+                self.open_shells.push(e);
+                Ok(())
+            }
+            Err(e) => Err(e),
+        }
     }
 
     /// Adds a representation item: a solid, a surface model or a shell.
@@ -1060,14 +1205,16 @@ impl<'x, 'a> Ctx<'x, 'a> {
             Ok(true)
         } else if h == "SHELL_BASED_SURFACE_MODEL" {
             for s in self.args(idx).refs(1)? {
-                self.shell(s, idx)?;
+                let (shell, entity) = self.shell(s, idx)?;
+                self.loose_shell(shell, entity, idx)?;
             }
             Ok(true)
         } else if matches!(
             h,
             "CLOSED_SHELL" | "OPEN_SHELL" | "ORIENTED_CLOSED_SHELL" | "ORIENTED_OPEN_SHELL"
         ) {
-            self.shell(idx, idx)?;
+            let (shell, entity) = self.shell(idx, idx)?;
+            self.loose_shell(shell, entity, entity)?;
             Ok(true)
         } else {
             Ok(false)
@@ -1077,12 +1224,18 @@ impl<'x, 'a> Ctx<'x, 'a> {
     // ------------------------------------------------------------------- units
 
     /// (kind, factor, name) of a unit: kind 'L' length (factor in mm),
-    /// 'A' plane angle (factor in radians), '?' other.
-    fn unit(&mut self, idx: usize, depth: usize) -> Option<(char, f64, String)> {
+    /// 'A' plane angle (factor in radians), '?' other. `None` for an entity
+    /// that is no unit. A length or angle unit whose name is unknown or whose
+    /// factor is not a positive finite number is an error naming it: a guess
+    /// would scale the whole part.
+    fn unit(&mut self, idx: usize, depth: usize) -> R<Option<(char, f64, String)>> {
         if depth > 8 {
-            return None;
+            return Err(StepErrorKind::Limit {
+                place: place_of(self.ex, idx),
+                reason: "unit defined through more than 8 conversions".into(),
+            });
         }
-        self.tick(1, idx).ok()?;
+        self.tick(1, idx)?;
         let mut kind = if self.has_part(idx, "LENGTH_UNIT") {
             'L'
         } else if self.has_part(idx, "PLANE_ANGLE_UNIT") {
@@ -1096,12 +1249,12 @@ impl<'x, 'a> Ctx<'x, 'a> {
         if let Some(a) = si {
             let n = a.vals.len();
             if n < 2 {
-                return None;
+                return Ok(None);
             }
             let (prefix, name) = (&a.vals[n - 2], &a.vals[n - 1]);
             let name = match name {
                 Value::Enum(s) => self.ex.raw(*s),
-                _ => return None,
+                _ => return Ok(None),
             };
             let (p, sym) = match prefix {
                 Value::Enum(s) => match self.ex.raw(*s) {
@@ -1119,19 +1272,33 @@ impl<'x, 'a> Ctx<'x, 'a> {
                     b"MICRO" => (1e-6, "u"),
                     b"NANO" => (1e-9, "n"),
                     b"PICO" => (1e-12, "p"),
+                    other if kind != '?' => {
+                        return Err(a.wrong(format!(
+                            "unknown SI prefix .{}.",
+                            String::from_utf8_lossy(other)
+                        )))
+                    }
                     _ => (1.0, ""),
                 },
                 _ => (1.0, ""),
             };
-            return match name {
-                b"METRE" => Some(('L', 1000.0 * p, format!("{sym}m"))),
-                b"RADIAN" => Some(('A', p, format!("{sym}rad"))),
-                _ => Some((kind, 1.0, String::new())),
+            return match (name, kind) {
+                (b"METRE", 'L' | '?') => Ok(Some(('L', 1000.0 * p, format!("{sym}m")))),
+                (b"RADIAN", 'A' | '?') => Ok(Some(('A', p, format!("{sym}rad")))),
+                (_, '?') => Ok(Some(('?', 1.0, String::new()))),
+                (other, k) => Err(a.wrong(format!(
+                    "unknown {} unit .{}.",
+                    if k == 'L' { "length" } else { "plane angle" },
+                    String::from_utf8_lossy(other)
+                ))),
             };
         }
-        let cbu = self
+        let Some(cbu) = self
             .part_args(idx, "CONVERSION_BASED_UNIT")
-            .or_else(|| (self.head(idx) == "CONVERSION_BASED_UNIT").then(|| self.args(idx)))?;
+            .or_else(|| (self.head(idx) == "CONVERSION_BASED_UNIT").then(|| self.args(idx)))
+        else {
+            return Ok(None);
+        };
         let name = cbu.string(0);
         let lname = name.trim().to_ascii_lowercase();
         let known = match lname.as_str() {
@@ -1143,42 +1310,64 @@ impl<'x, 'a> Ctx<'x, 'a> {
             "grad" | "gon" => Some(('A', std::f64::consts::PI / 200.0)),
             _ => None,
         };
-        let from_measure = (|| {
-            let m = cbu.opt_r(1).ok()??;
+        // The conversion factor: (measure entity, kind, factor).
+        let mut from_measure = None;
+        if let Ok(Some(m)) = cbu.opt_r(1) {
             let ma = if self.head(m).is_empty() {
-                self.part_args(m, "MEASURE_WITH_UNIT")?
+                self.part_args(m, "MEASURE_WITH_UNIT")
             } else {
                 let a = self.args(m);
-                A {
-                    vals: a.vals.get(a.vals.len().checked_sub(2)?..)?,
-                    ..a
-                }
+                a.vals
+                    .len()
+                    .checked_sub(2)
+                    .and_then(|k| a.vals.get(k..))
+                    .map(|vals| A { vals, ..a })
             };
-            let value = ma.num(0).ok()?;
-            let inner = ma.opt_r(1).ok()??;
-            let (k, f, _) = self.unit(inner, depth + 1)?;
-            Some((k, value * f))
-        })();
+            if let Some(ma) = ma {
+                let value = ma.num(0)?;
+                if let Ok(Some(inner)) = ma.opt_r(1) {
+                    if let Some((k, f, _)) = self.unit(inner, depth + 1)? {
+                        from_measure = Some((m, ma, k, value * f));
+                    }
+                }
+            }
+        }
         if kind == '?' {
             kind = from_measure
-                .map(|m| m.0)
+                .as_ref()
+                .map(|m| m.2)
                 .or(known.map(|k| k.0))
                 .unwrap_or('?');
         }
+        if kind == '?' {
+            // Not a unit a part's geometry is measured in.
+            return Ok(Some(('?', 1.0, lname)));
+        }
         let factor = match (from_measure, known) {
-            (Some((_, f)), _) if f.is_finite() && f > 0.0 => f,
-            (_, Some((_, f))) => f,
-            _ => return Some((kind, 1.0, lname)),
+            (Some((_, ma, _, f)), _) => {
+                if !(f.is_finite() && f > 0.0) {
+                    return Err(ma.wrong(format!(
+                        "conversion factor {f} of unit '{name}' is not a positive number"
+                    )));
+                }
+                f
+            }
+            (None, Some((_, f))) => f,
+            (None, None) => {
+                return Err(cbu.wrong(format!(
+                    "unknown unit name '{name}' without a conversion factor"
+                )))
+            }
         };
-        Some((kind, factor, lname))
+        Ok(Some((kind, factor, lname)))
     }
 
-    fn context_units(&mut self, ctx: Option<usize>) -> Units {
+    fn context_units(&mut self, ctx: Option<usize>) -> R<Units> {
         let Some(ctx) = ctx else {
-            return Units::mm();
+            return Ok(Units::mm());
         };
         if let Some(u) = self.unit_cache.get(&ctx) {
-            return u.clone();
+            return Ok(u.clone());
         }
         let mut u = Units::mm();
         if let Some(a) = self.part_args(ctx, "GLOBAL_UNIT_ASSIGNED_CONTEXT") {
@@ -1187,7 +1376,7 @@ impl<'x, 'a> Ctx<'x, 'a> {
                     let Ok(ui) = resolve_from(self.ex, ctx, v) else {
                         continue;
                     };
-                    match self.unit(ui, 0) {
+                    match self.unit(ui, 0)? {
                         Some(('L', f, name)) => {
                             u.length = f;
                             u.name = name;
@@ -1200,7 +1389,7 @@ impl<'x, 'a> Ctx<'x, 'a> {
             }
         }
         self.unit_cache.insert(ctx, u.clone());
-        u
+        Ok(u)
     }
 }
 
@@ -1543,14 +1732,14 @@ struct Assembler<'x, 'a> {
 }
 
 impl<'x, 'a> Assembler<'x, 'a> {
-    fn rep_units(&mut self, rep: usize) -> Units {
+    fn rep_units(&mut self, rep: usize) -> R<Units> {
         let ctx = self.reps.get(&rep).and_then(|r| r.context);
         self.c.context_units(ctx)
     }
 
     fn rep_brep(&mut self, rep: usize) -> R<&Brep> {
         if !self.cache.contains_key(&rep) {
-            let u = self.rep_units(rep);
+            let u = self.rep_units(rep)?;
             let items = self
                 .reps
                 .get(&rep)
@@ -1597,8 +1786,8 @@ impl<'x, 'a> Assembler<'x, 'a> {
             let local = match l.xf {
                 Xf::Identity => DMat4::IDENTITY,
                 Xf::Items { child, parent } => {
-                    let cu = self.rep_units(l.child);
-                    let pu = self.rep_units(rep);
+                    let cu = self.rep_units(l.child)?;
+                    let pu = self.rep_units(rep)?;
                     let mc = self.c.matrix_of(child, &cu)?;
                     let mp = self.c.matrix_of(parent, &pu)?;
                     mp * mc.inverse()
@@ -1638,6 +1827,7 @@ pub(crate) fn build(ex: &Exchange<'_>, limits: &Limits) -> R<Built> {
         path: Vec::new(),
         geo: Geo::new(&Units::mm()),
         unit_cache: HashMap::new(),
+        open_shells: Vec::new(),
     };
     c.tick(ex.entities.len() as u64, 0)?;
     let (order, reps, in_reps) = build_reps(&mut c)?;
@@ -1677,7 +1867,7 @@ pub(crate) fn build(ex: &Exchange<'_>, limits: &Limits) -> R<Built> {
         let mut u = None;
         for idx in 0..ex.entities.len() {
             if asm.c.has_part(idx, "GLOBAL_UNIT_ASSIGNED_CONTEXT") {
-                let cu = asm.c.context_units(Some(idx));
+                let cu = asm.c.context_units(Some(idx))?;
                 if cu.declared {
                     u = Some(cu);
                     break;
@@ -1721,11 +1911,25 @@ pub(crate) fn build(ex: &Exchange<'_>, limits: &Limits) -> R<Built> {
             reason: reason.into(),
         });
     }
+    // A part that is not a closed solid must not be planned as one.
     if out.solids.is_empty() {
+        if let Some(first) = c.open_shells.first() {
+            let reason = match (first, c.open_shells.len()) {
+                (e, 1) => e.to_string(),
+                (e, n) => format!("{e}; and {} more open shell(s)", n - 1),
+            };
+            return Err(StepErrorKind::NoSolid { reason });
+        }
         c.warnings.push(format!(
-            "no solid in this file; {} shell(s) read as surface models",
+            "no solid in this file; {} closed shell(s) read as surface models",
             out.shells.len()
         ));
+    } else {
+        for e in &c.open_shells {
+            c.warnings.push(format!(
+                "besides the solids, a surface that is not closed: {e}"
+            ));
+        }
     }
     let units = first_units.unwrap_or_else(Units::mm);
     if !units.declared {

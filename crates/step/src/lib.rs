@@ -14,6 +14,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 mod build;
+mod check;
 pub mod p21;
 pub mod write;
 
@@ -105,6 +106,14 @@ pub enum StepErrorKind {
     },
     #[error("no solid in this file ({reason})")]
     NoSolid { reason: String },
+    /// A shell that is not closed or not consistently oriented: the reason
+    /// names its edges and faces by `#id`.
+    #[error("{place} {entity}: not a closed solid: {reason}")]
+    NotClosed {
+        place: Place,
+        entity: String,
+        reason: String,
+    },
 }
 
 impl StepErrorKind {
@@ -116,7 +125,8 @@ impl StepErrorKind {
             | StepErrorKind::Dangling { place, .. }
             | StepErrorKind::Cyclic { place, .. }
             | StepErrorKind::WrongParameter { place, .. }
-            | StepErrorKind::Unsupported { place, .. } => Some(place),
+            | StepErrorKind::Unsupported { place, .. }
+            | StepErrorKind::NotClosed { place, .. } => Some(place),
             StepErrorKind::Io(_) | StepErrorKind::NoSolid { .. } => None,
         }
     }
@@ -155,28 +165,44 @@ impl From<StepErrorKind> for StepError {
 
 /// Reads a STEP file with the default [`Limits`].
 pub fn read_step_file(path: &Path) -> Result<StepModel, StepError> {
-    let limits = Limits::default();
+    read_step_file_with(path, &Limits::default())
+}
+
+/// Reads a STEP file within `limits`. Its size is checked before it is
+/// read, and the read stops past the limit (a file that grows meanwhile).
+pub fn read_step_file_with(path: &Path, limits: &Limits) -> Result<StepModel, StepError> {
+    use std::io::Read;
     let with_file = |kind: StepErrorKind| StepError {
         file: Some(path.to_path_buf()),
         kind,
     };
-    let meta = std::fs::metadata(path).map_err(|e| with_file(e.into()))?;
-    if meta.len() > limits.max_bytes as u64 {
-        return Err(with_file(StepErrorKind::Limit {
+    let too_big = |len: u64| {
+        with_file(StepErrorKind::Limit {
             place: Place {
                 id: None,
                 line: 1,
                 column: 1,
             },
             reason: format!(
-                "file is {} bytes, more than the limit of {} bytes",
-                meta.len(),
+                "file is {len} bytes, more than the limit of {} bytes",
                 limits.max_bytes
             ),
-        }));
+        })
+    };
+    let file = std::fs::File::open(path).map_err(|e| with_file(e.into()))?;
+    let meta = file.metadata().map_err(|e| with_file(e.into()))?;
+    if meta.len() > limits.max_bytes as u64 {
+        return Err(too_big(meta.len()));
     }
-    let bytes = std::fs::read(path).map_err(|e| with_file(e.into()))?;
-    read_step_bytes(&bytes, &limits).map_err(|e| with_file(e.kind))
+    let cap = limits.max_bytes as u64 + 1;
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(cap)
+        .read_to_end(&mut bytes)
+        .map_err(|e| with_file(e.into()))?;
+    if bytes.len() > limits.max_bytes {
+        return Err(too_big(bytes.len() as u64));
+    }
+    read_step_bytes(&bytes, limits).map_err(|e| with_file(e.kind))
 }
 
 /// Reads STEP data from memory.

@@ -45,8 +45,8 @@ pub const UNCERTAINTY_MM: f64 = 1e-6;
 ///   `ORIENTED_CLOSED_SHELL(.F.)` of closed shells holding the void's faces
 ///   reversed (bounds and `same_sense` flipped), as the standard asks: in the
 ///   B-rep the void's faces point into the void, away from the material.
-///   Our reader flips only `same_sense` of an oriented shell's faces, so on
-///   reading back a void's loops have `orientation` flipped (same coedges).
+///   The reader turns an oriented shell's faces over (bounds and
+///   `same_sense`), so a void reads back as it was.
 /// * [`Surface::Other`] (a kind the reader kept by name only) has no geometry
 ///   to write: the face is written on a plane through its boundary (Newell's
 ///   normal of its first loop) and a comment in the file says so.

@@ -227,13 +227,20 @@ fn nested_assembly_places_every_instance() {
 }
 
 #[test]
-fn surface_only_file_gives_open_shells() {
-    let m = read("surface_only.step");
-    assert!(m.brep.solids.is_empty());
-    assert_eq!(m.brep.shells.len(), 1);
-    assert!(!m.brep.shells[0].closed);
-    assert_eq!(m.brep.faces.len(), 1);
-    assert!(m.warnings.iter().any(|w| w.contains("no solid")));
+fn surface_only_file_is_not_a_solid() {
+    // One open sheet: not a part to plan.
+    let e = read_step_file(&fixture("surface_only.step")).unwrap_err();
+    assert!(matches!(e.kind, StepErrorKind::NoSolid { .. }), "{e}");
+    let msg = e.to_string();
+    assert!(msg.contains("surface_only.step"), "{msg}");
+    assert!(
+        msg.contains("#46 (line") && msg.contains("OPEN_SHELL of SHELL_BASED_SURFACE_MODEL #47"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("edge #18 used once (a face is missing)"),
+        "{msg}"
+    );
 }
 
 #[test]
