@@ -5,6 +5,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::at;
+use crate::check::{Checks, Range};
+
 /// The name of the interference file at the knowledge root.
 pub const INTERFERENCE_FILE: &str = "interference.ron";
 
@@ -93,46 +96,67 @@ impl InterferenceKnowledge {
     /// Problems a parser cannot see (block ids are checked against the
     /// strategies by the knowledge loader).
     pub fn problems(&self) -> Vec<String> {
-        let mut out = Vec::new();
+        let mut c = Checks::default();
+        self.checks(&mut c);
+        c.messages()
+    }
+
+    /// The problems, each at its place in `interference.ron`. Slabs at
+    /// least 0.01 mm thick keep a 1 m high part under 10⁵ slabs.
+    pub fn checks(&self, c: &mut Checks) {
         let mut seen = std::collections::BTreeSet::new();
-        for r in &self.keep_order {
+        for (i, r) in self.keep_order.iter().enumerate() {
             if !seen.insert(r.id.as_str()) {
-                out.push(format!("duplicate keep_order rule id `{}`", r.id));
+                c.push(
+                    at!["keep_order", i, "id"],
+                    format!("duplicate keep_order rule id `{}`", r.id),
+                );
             }
         }
-        if !(self.sloped_slab_thickness.is_finite() && self.sloped_slab_thickness > 0.0) {
-            out.push(format!(
-                "`sloped_slab_thickness` must be a positive number, not {}",
-                self.sloped_slab_thickness
-            ));
-        }
+        c.range(
+            at!["sloped_slab_thickness"],
+            "",
+            "`sloped_slab_thickness`",
+            self.sloped_slab_thickness,
+            Range::closed(0.01, 1000.0),
+            " mm",
+        );
         if let Some(sh) = &self.shallow_slabs {
-            if !(sh.along_face.is_finite() && sh.along_face > 0.0) {
-                out.push(format!(
-                    "`shallow_slabs.along_face` must be a positive number, not {}",
-                    sh.along_face
-                ));
-            }
-            if !(sh.min_thickness.is_finite()
-                && sh.min_thickness > 0.0
-                && sh.min_thickness <= self.sloped_slab_thickness)
-            {
-                out.push(format!(
-                    "`shallow_slabs.min_thickness` must be positive and at most \
-                     `sloped_slab_thickness` ({}), not {}",
-                    self.sloped_slab_thickness, sh.min_thickness
-                ));
-            }
+            c.range(
+                at!["shallow_slabs", "along_face"],
+                "",
+                "`shallow_slabs.along_face`",
+                sh.along_face,
+                Range::above(0.0, 1000.0),
+                " mm",
+            );
+            let hi = if self.sloped_slab_thickness.is_finite() {
+                self.sloped_slab_thickness.max(0.01)
+            } else {
+                0.01
+            };
+            c.range(
+                at!["shallow_slabs", "min_thickness"],
+                "",
+                "`shallow_slabs.min_thickness`",
+                sh.min_thickness,
+                Range::closed(0.01, hi),
+                " mm (at most `sloped_slab_thickness`)",
+            );
         }
-        if !(self.sliver_area.is_finite() && self.sliver_area >= 0.0) {
-            out.push(format!(
-                "`sliver_area` must be zero or positive, not {}",
-                self.sliver_area
-            ));
-        }
+        c.range(
+            at!["sliver_area"],
+            "",
+            "`sliver_area`",
+            self.sliver_area,
+            Range::closed(0.0, 1e6),
+            " mm²",
+        );
         if self.remaining_owners.is_empty() {
-            out.push("`remaining_owners` is empty: remaining material would have no owner".into());
+            c.push(
+                at!["remaining_owners"],
+                "`remaining_owners` is empty: remaining material would have no owner".into(),
+            );
         }
-        out
     }
 }

@@ -13,6 +13,7 @@ use std::collections::btree_map::Entry;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+pub mod check;
 pub mod interference;
 pub mod load;
 pub mod methods;
@@ -23,6 +24,7 @@ pub mod sequencing;
 pub mod sizing;
 pub mod strategies;
 
+pub use check::{Problem, Range, Seg};
 pub use interference::*;
 pub use load::{load_ron, parse_ron, KnowledgeError};
 pub use methods::*;
@@ -77,6 +79,10 @@ const BUILTIN: &[(&str, &str)] = &[
     (
         "machines/hsm_5axis.ron",
         include_str!("../../../knowledge/machines/hsm_5axis.ron"),
+    ),
+    (
+        "tools/alu_hsm.ron",
+        include_str!("../../../knowledge/tools/alu_hsm.ron"),
     ),
     (
         "tools/endmills_12_20.ron",
@@ -137,6 +143,25 @@ pub const ITEM_FOLDERS: [&str; 4] = ["machines", "tools", "materials", "posts"];
 struct Collector {
     k: Option<Knowledge>,
     errors: Vec<KnowledgeError>,
+    /// Each material's file and text by id, to point cross-file problems
+    /// (feeds) at its values.
+    material_files: BTreeMap<String, (PathBuf, String)>,
+}
+
+/// Runs `check` on a parsed value and records its problems, each located
+/// in the file's text.
+fn located<T>(
+    errors: &mut Vec<KnowledgeError>,
+    path: &Path,
+    text: &str,
+    value: &T,
+    check: impl Fn(&T, &mut check::Checks),
+) {
+    let mut c = check::Checks::default();
+    check(value, &mut c);
+    for p in c.out {
+        errors.push(KnowledgeError::at_value(path, text, p));
+    }
 }
 
 impl Knowledge {
@@ -233,17 +258,32 @@ impl Knowledge {
                 _ => rest.push((path, text, parent)),
             }
         }
-        let sizing = parse_root::<SizingKnowledge>(&root, SIZING_FILE, origin, &mut errors);
-        let walls = parse_root::<WallRecognition>(&root, ROOT_FILES[1], origin, &mut errors);
-        let depressions =
-            parse_root::<DepressionRecognition>(&root, ROOT_FILES[2], origin, &mut errors);
-        let sequencing =
-            parse_root::<SequencingKnowledge>(&root, SEQUENCING_FILE, origin, &mut errors);
-        let strategies =
-            parse_root::<StrategyKnowledge>(&root, STRATEGIES_FILE, origin, &mut errors);
-        let interference =
-            parse_root::<InterferenceKnowledge>(&root, INTERFERENCE_FILE, origin, &mut errors);
-        let methods = parse_root::<MethodKnowledge>(&root, METHODS_FILE, origin, &mut errors);
+        let e = &mut errors;
+        let sizing = parse_root(&root, SIZING_FILE, origin, e, SizingKnowledge::checks);
+        let walls = parse_root(&root, ROOT_FILES[1], origin, e, WallRecognition::checks);
+        let depressions = parse_root(
+            &root,
+            ROOT_FILES[2],
+            origin,
+            e,
+            DepressionRecognition::checks,
+        );
+        let sequencing = parse_root(
+            &root,
+            SEQUENCING_FILE,
+            origin,
+            e,
+            SequencingKnowledge::checks,
+        );
+        let strategies = parse_root(&root, STRATEGIES_FILE, origin, e, StrategyKnowledge::checks);
+        let interference = parse_root(
+            &root,
+            INTERFERENCE_FILE,
+            origin,
+            e,
+            InterferenceKnowledge::checks,
+        );
+        let methods = parse_root(&root, METHODS_FILE, origin, e, MethodKnowledge::checks);
         let (
             Some(sizing),
             Some(wall_recognition),
@@ -280,23 +320,47 @@ impl Knowledge {
                 methods,
             }),
             errors,
+            material_files: BTreeMap::new(),
         };
         for (path, text, parent) in rest {
             match parent.as_str() {
-                "machines" => c.add(path, text, |k| &mut k.machines, |m: &Machine| &m.id),
-                "tools" => c.add(path, text, |k| &mut k.tool_sets, |t: &ToolSet| &t.id),
-                "materials" => c.add(path, text, |k| &mut k.materials, |m: &Material| &m.id),
-                "posts" => {
-                    // Checked here, not in `validate`, so problems name the file.
-                    if let Ok(p) = parse_ron::<PostProcessor>(text, path) {
-                        for problem in p.problems() {
-                            c.errors.push(KnowledgeError::Invalid {
-                                path: path.clone(),
-                                reason: problem,
-                            });
-                        }
+                "machines" => {
+                    c.add(
+                        path,
+                        text,
+                        |k| &mut k.machines,
+                        |m: &Machine| &m.id,
+                        Machine::checks,
+                    );
+                }
+                "tools" => {
+                    c.add(
+                        path,
+                        text,
+                        |k| &mut k.tool_sets,
+                        |t: &ToolSet| &t.id,
+                        ToolSet::checks,
+                    );
+                }
+                "materials" => {
+                    if let Some(id) = c.add(
+                        path,
+                        text,
+                        |k| &mut k.materials,
+                        |m: &Material| &m.id,
+                        Material::checks,
+                    ) {
+                        c.material_files.insert(id, (path.clone(), text.clone()));
                     }
-                    c.add(path, text, |k| &mut k.posts, |p: &PostProcessor| &p.id)
+                }
+                "posts" => {
+                    c.add(
+                        path,
+                        text,
+                        |k| &mut k.posts,
+                        |p: &PostProcessor| &p.id,
+                        PostProcessor::checks,
+                    );
                 }
                 _ => c.errors.push(KnowledgeError::Invalid {
                     path: path.clone(),
@@ -306,9 +370,12 @@ impl Knowledge {
                 }),
             }
         }
-        let k = c.k.take().expect("set above");
+        let Some(k) = c.k.take() else {
+            return Err(c.errors);
+        };
         let mut errors = c.errors;
-        errors.extend(validate(&k));
+        let interference_file = root.get(INTERFERENCE_FILE).copied();
+        errors.extend(validate(&k, interference_file, &c.material_files));
         if errors.is_empty() {
             Ok(k)
         } else {
@@ -339,10 +406,14 @@ fn parse_root<T: serde::de::DeserializeOwned>(
     name: &str,
     origin: &str,
     errors: &mut Vec<KnowledgeError>,
+    check: impl Fn(&T, &mut check::Checks),
 ) -> Option<T> {
     match root.get(name) {
         Some((path, text)) => match parse_ron::<T>(text, path) {
-            Ok(v) => Some(v),
+            Ok(v) => {
+                located(errors, path, text, &v, check);
+                Some(v)
+            }
             Err(e) => {
                 errors.push(e);
                 None
@@ -359,18 +430,21 @@ fn parse_root<T: serde::de::DeserializeOwned>(
 }
 
 impl Collector {
+    /// Parses, checks and files one item; its id when it was added.
     fn add<T: serde::de::DeserializeOwned>(
         &mut self,
         path: &Path,
         text: &str,
         map: impl Fn(&mut Knowledge) -> &mut BTreeMap<String, T>,
         id: impl Fn(&T) -> &String,
-    ) {
+        check: impl Fn(&T, &mut check::Checks),
+    ) -> Option<String> {
         match parse_ron::<T>(text, path) {
             Ok(item) => {
+                located(&mut self.errors, path, text, &item, check);
                 let key = id(&item).clone();
-                let k = self.k.as_mut().expect("present while collecting");
-                match map(k).entry(key) {
+                let k = self.k.as_mut()?;
+                match map(k).entry(key.clone()) {
                     Entry::Occupied(e) => self.errors.push(KnowledgeError::Invalid {
                         path: path.to_path_buf(),
                         reason: format!(
@@ -380,10 +454,15 @@ impl Collector {
                     }),
                     Entry::Vacant(e) => {
                         e.insert(item);
+                        return Some(key);
                     }
                 }
+                None
             }
-            Err(e) => self.errors.push(e),
+            Err(e) => {
+                self.errors.push(e);
+                None
+            }
         }
     }
 }
@@ -395,111 +474,21 @@ fn invalid(what: &str, reason: String) -> KnowledgeError {
     }
 }
 
-/// Checks values a parser cannot: ranges, positivity, references.
-fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
+/// The lowest feed (mm/min) a tool may get: a slower one prints as `F0`
+/// (or rounds to a feed the control refuses).
+pub const MIN_FEED: f64 = 1.0;
+
+/// Checks across files: references between files and the feeds that tools,
+/// materials, machines and methods give together. Each file's own values
+/// are checked where it is read.
+fn validate(
+    k: &Knowledge,
+    interference: Option<(&PathBuf, &String)>,
+    materials: &BTreeMap<String, (PathBuf, String)>,
+) -> Vec<KnowledgeError> {
     let mut errors = Vec::new();
-    let positive = |errors: &mut Vec<KnowledgeError>, what: &str, name: &str, v: f64| {
-        if !(v.is_finite() && v > 0.0) {
-            errors.push(invalid(
-                what,
-                format!("`{name}` must be a positive number, not {v}"),
-            ));
-        }
-    };
-    for m in k.machines.values() {
-        let what = format!("machine `{}`", m.id);
-        for (axis, a) in [("x", &m.x), ("y", &m.y), ("z", &m.z)] {
-            if a.travel.0.partial_cmp(&a.travel.1) != Some(std::cmp::Ordering::Less) {
-                errors.push(invalid(
-                    &what,
-                    format!(
-                        "axis {axis}: travel ({}, {}) is empty",
-                        a.travel.0, a.travel.1
-                    ),
-                ));
-            }
-            positive(&mut errors, &what, &format!("{axis}.v_max"), a.v_max);
-            positive(&mut errors, &what, &format!("{axis}.a_max"), a.a_max);
-        }
-        positive(&mut errors, &what, "a_centripetal", m.a_centripetal);
-        positive(&mut errors, &what, "spindle_max_rpm", m.spindle_max_rpm);
-        match m.kinematics {
-            Kinematics::ThreeAxis => {}
-            Kinematics::ThreePlusTwo { max_tilt_deg }
-            | Kinematics::FiveAxisHead { max_tilt_deg } => {
-                if !(0.0..=180.0).contains(&max_tilt_deg) {
-                    errors.push(invalid(
-                        &what,
-                        format!("max_tilt_deg {max_tilt_deg} is outside 0..=180"),
-                    ));
-                }
-            }
-        }
-    }
-    for s in k.tool_sets.values() {
-        let mut seen = std::collections::BTreeSet::new();
-        if s.tools.is_empty() {
-            errors.push(invalid(
-                &format!("tool set `{}`", s.id),
-                "has no tools".into(),
-            ));
-        }
-        for t in &s.tools {
-            let what = format!("tool `{}` in set `{}`", t.id, s.id);
-            if !seen.insert(t.id.clone()) {
-                errors.push(invalid(&what, "duplicate tool id".into()));
-            }
-            for (n, v) in [
-                ("diameter", t.diameter),
-                ("flute_length", t.flute_length),
-                ("stickout", t.stickout),
-                ("shank_diameter", t.shank_diameter),
-                ("holder_diameter", t.holder_diameter),
-                ("max_slot_depth_ratio", t.max_slot_depth_ratio),
-            ] {
-                positive(&mut errors, &what, n, v);
-            }
-            if t.corner_radius < 0.0 || t.corner_radius > t.diameter / 2.0 {
-                errors.push(invalid(
-                    &what,
-                    format!(
-                        "corner_radius {} must lie in 0..=diameter/2 ({})",
-                        t.corner_radius,
-                        t.diameter / 2.0
-                    ),
-                ));
-            }
-            if t.flute_length > t.stickout {
-                errors.push(invalid(
-                    &what,
-                    format!(
-                        "flute_length {} is longer than the stickout {}",
-                        t.flute_length, t.stickout
-                    ),
-                ));
-            }
-        }
-    }
-    for problem in k.sizing.problems() {
-        errors.push(invalid("sizing knowledge (sizing.ron)", problem));
-    }
-    for problem in k.sequencing.problems() {
-        errors.push(invalid("sequencing knowledge (sequencing.ron)", problem));
-    }
-    for problem in k.strategies.problems() {
-        errors.push(invalid("strategy knowledge (strategies.ron)", problem));
-    }
-    for problem in k.interference.problems() {
-        errors.push(invalid(
-            "interference knowledge (interference.ron)",
-            problem,
-        ));
-    }
-    for problem in k.methods.problems() {
-        errors.push(invalid("method knowledge (methods.ron)", problem));
-    }
     // Rules that name a strategy block must name one that exists.
-    for r in &k.interference.keep_order {
+    for (i, r) in k.interference.keep_order.iter().enumerate() {
         if let FeatureSelector::Block { block, .. } = &r.select {
             let known = k
                 .strategies
@@ -508,33 +497,70 @@ fn validate(k: &Knowledge) -> Vec<KnowledgeError> {
                 .flat_map(|s| s.blocks.iter())
                 .any(|b| b.id() == block);
             if !known {
-                errors.push(invalid(
-                    "interference knowledge (interference.ron)",
-                    format!(
-                        "keep_order rule `{}` selects block `{block}`, which no strategy in strategies.ron has",
-                        r.id
+                let reason = format!(
+                    "keep_order rule `{}` selects block `{block}`, which no strategy in strategies.ron has",
+                    r.id
+                );
+                errors.push(match interference {
+                    Some((path, text)) => KnowledgeError::at_value(
+                        path,
+                        text,
+                        Problem {
+                            at: at!["keep_order", i, "select", "block"],
+                            message: reason,
+                        },
                     ),
-                ));
+                    None => invalid("interference knowledge (interference.ron)", reason),
+                });
             }
         }
     }
+    // The slowest feed any tool gets: finishing feed per tooth, one flute
+    // per tooth, the spindle speed the cutting speed gives (capped by the
+    // machine), capped by the slower table axis, times the link factor
+    // when that is below 1. Reported once per material and tool.
+    let link = k.methods.link_feed_factor.min(1.0);
     for m in k.materials.values() {
-        let what = format!("material `{}`", m.id);
-        positive(&mut errors, &what, "youngs_modulus", m.youngs_modulus);
-        positive(&mut errors, &what, "density", m.density);
-        positive(&mut errors, &what, "cutting_speed", m.cutting.cutting_speed);
-        positive(
-            &mut errors,
-            &what,
-            "feed_per_tooth_roughing",
-            m.cutting.feed_per_tooth_roughing,
-        );
-        positive(
-            &mut errors,
-            &what,
-            "feed_per_tooth_finishing",
-            m.cutting.feed_per_tooth_finishing,
-        );
+        let c = &m.cutting;
+        for set in k.tool_sets.values() {
+            for t in &set.tools {
+                let slowest = k
+                    .machines
+                    .values()
+                    .map(|mc| {
+                        let rpm = (1000.0 * c.cutting_speed / (std::f64::consts::PI * t.diameter))
+                            .min(mc.spindle_max_rpm);
+                        let vmax = 60.0 * mc.x.v_max.min(mc.y.v_max);
+                        let fz = c.feed_per_tooth_finishing.min(c.feed_per_tooth_roughing);
+                        ((fz * f64::from(t.flutes) * rpm).min(vmax) * link, &mc.id)
+                    })
+                    .min_by(|a, b| a.0.total_cmp(&b.0));
+                let Some((feed, machine)) = slowest else {
+                    continue;
+                };
+                // Values already refused (NaN, zero) are not reported twice.
+                if !feed.is_finite() || feed <= 0.0 || feed >= MIN_FEED {
+                    continue;
+                }
+                let reason = format!(
+                    "material `{}`: with tool `{}` (set `{}`) on machine `{machine}` the slowest \
+                     feed is {feed:.4} mm/min, below {MIN_FEED} mm/min (it would print F0): \
+                     raise the feed per tooth or cutting speed",
+                    m.id, t.id, set.id
+                );
+                errors.push(match materials.get(&m.id) {
+                    Some((path, text)) => KnowledgeError::at_value(
+                        path,
+                        text,
+                        Problem {
+                            at: at!["cutting", "feed_per_tooth_finishing"],
+                            message: reason,
+                        },
+                    ),
+                    None => invalid(&format!("material `{}`", m.id), reason),
+                });
+            }
+        }
     }
     errors
 }

@@ -25,6 +25,20 @@ pub enum KnowledgeError {
     #[error("{path}: {reason}")]
     #[diagnostic(code(thinplan::knowledge::invalid))]
     Invalid { path: PathBuf, reason: String },
+    /// A value that parses but is outside its allowed range (or breaks a
+    /// rule between values), pointed at like a syntax error.
+    #[error("{path}:{line}:{column}: {reason}")]
+    #[diagnostic(code(thinplan::knowledge::value))]
+    Value {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        reason: String,
+        #[source_code]
+        src: NamedSource<String>,
+        #[label("this value")]
+        span: SourceSpan,
+    },
 }
 
 impl KnowledgeError {
@@ -33,7 +47,21 @@ impl KnowledgeError {
         match self {
             KnowledgeError::Read { path, .. }
             | KnowledgeError::Syntax { path, .. }
-            | KnowledgeError::Invalid { path, .. } => path,
+            | KnowledgeError::Invalid { path, .. }
+            | KnowledgeError::Value { path, .. } => path,
+        }
+    }
+
+    /// A value problem in `text` (the file at `path`), located by its path.
+    pub fn at_value(path: &Path, text: &str, problem: crate::check::Problem) -> KnowledgeError {
+        let (line, column, offset) = crate::check::locate(text, &problem.at);
+        KnowledgeError::Value {
+            path: path.to_path_buf(),
+            line,
+            column,
+            reason: problem.message,
+            src: NamedSource::new(path.display().to_string(), text.to_string()),
+            span: SourceSpan::from((offset, 0)),
         }
     }
 }

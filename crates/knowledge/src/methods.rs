@@ -15,6 +15,9 @@ use std::collections::BTreeSet;
 
 use serde::{Deserialize, Serialize};
 
+use crate::at;
+use crate::check::{Checks, Range, Seg};
+
 /// The name of the methods file at the knowledge root.
 pub const METHODS_FILE: &str = "methods.ron";
 
@@ -349,30 +352,41 @@ impl MethodKnowledge {
     /// Problems a parser cannot find: duplicate ids, combinations no method
     /// covers, numbers out of range, patterns that cannot serve the sides.
     pub fn problems(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        let frac = |out: &mut Vec<String>, id: &str, name: &str, v: f64, hi: f64| {
-            if !(v.is_finite() && v > 0.0 && v <= hi) {
-                out.push(format!("method `{id}`: {name} {v} must lie in (0, {hi}]"));
-            }
-        };
-        if !(self.safe_clearance.is_finite() && self.safe_clearance > 0.0) {
-            out.push(format!(
-                "safe_clearance {} must be positive",
-                self.safe_clearance
-            ));
-        }
-        if !(self.link_feed_factor.is_finite() && self.link_feed_factor > 0.0) {
-            out.push(format!(
-                "link_feed_factor {} must be positive",
-                self.link_feed_factor
-            ));
-        }
-        if !(self.corner_angle_deg.is_finite() && (0.0..=180.0).contains(&self.corner_angle_deg)) {
-            out.push(format!(
-                "corner_angle_deg {} is outside 0..=180",
-                self.corner_angle_deg
-            ));
-        }
+        let mut c = Checks::default();
+        self.checks(&mut c);
+        c.messages()
+    }
+
+    /// The problems, each at its place in `methods.ron`. Stepovers and
+    /// depths are fractions of the tool diameter D (≥ 0.2 mm, `tools/`): at
+    /// least 0.01 · D keeps a 1 m feature under 5·10⁵ passes or levels.
+    pub fn checks(&self, c: &mut Checks) {
+        c.range(
+            at!["safe_clearance"],
+            "",
+            "safe_clearance",
+            self.safe_clearance,
+            Range::above(0.0, 1000.0),
+            " mm",
+        );
+        // Links run at this fraction of the roughing feed: bounded below so
+        // they never round to F0.
+        c.range(
+            at!["link_feed_factor"],
+            "",
+            "link_feed_factor",
+            self.link_feed_factor,
+            Range::closed(0.01, 10.0),
+            " (fraction of the roughing feed)",
+        );
+        c.range(
+            at!["corner_angle_deg"],
+            "",
+            "corner_angle_deg",
+            self.corner_angle_deg,
+            Range::closed(0.0, 180.0),
+            "°",
+        );
         let descending = self.fit_scales.windows(2).all(|w| w[0] > w[1]);
         if self.fit_scales.is_empty()
             || !descending
@@ -381,148 +395,236 @@ impl MethodKnowledge {
                 .iter()
                 .any(|s| !(s.is_finite() && *s > 0.0 && *s <= 1.0))
         {
-            out.push(format!(
-                "fit_scales {:?} must be one or more fractions in (0, 1], largest first",
-                self.fit_scales
-            ));
+            c.push(
+                at!["fit_scales"],
+                format!(
+                    "fit_scales {:?} must be one or more fractions in (0, 1], largest first",
+                    self.fit_scales
+                ),
+            );
         }
-        if !(self.run_off_radius.is_finite()
-            && self.run_off_radius > 0.0
-            && self.run_off_radius <= 10.0)
-        {
-            out.push(format!(
-                "run_off_radius {} must lie in (0, 10]",
-                self.run_off_radius
-            ));
-        }
+        c.range(
+            at!["run_off_radius"],
+            "",
+            "run_off_radius",
+            self.run_off_radius,
+            Range::above(0.0, 10.0),
+            "",
+        );
         let mut ids = BTreeSet::new();
         for (i, m) in self.methods.iter().enumerate() {
+            let here = |f: &'static str| at!["methods", i, f];
             let id = if m.id.is_empty() {
-                out.push(format!("method #{} has an empty id", i + 1));
+                c.push(here("id"), format!("method #{} has an empty id", i + 1));
                 format!("#{}", i + 1)
             } else {
                 m.id.clone()
             };
             if !m.id.is_empty() && !ids.insert(m.id.as_str()) {
-                out.push(format!("method `{id}`: duplicate id"));
+                c.push(here("id"), format!("method `{id}`: duplicate id"));
             }
-            let id = id.as_str();
-            frac(&mut out, id, "rest.stepover", m.rest.stepover, 1.0);
-            frac(&mut out, id, "rest.depth", m.rest.depth, 10.0);
+            let p = format!("method `{id}`: ");
+            let stepover = Range::closed(0.01, 1.0);
+            let depth = Range::closed(0.01, 10.0);
+            let of_d = " (fraction of D)";
+            c.range(
+                at!["methods", i, "rest", "stepover"],
+                &p,
+                "rest.stepover",
+                m.rest.stepover,
+                stepover,
+                of_d,
+            );
+            c.range(
+                at!["methods", i, "rest", "depth"],
+                &p,
+                "rest.depth",
+                m.rest.depth,
+                depth,
+                of_d,
+            );
             if let Some(b) = &m.boundary {
-                frac(&mut out, id, "boundary.stepover", b.stepover, 0.5);
-                frac(&mut out, id, "boundary.depth", b.depth, 10.0);
-                match b.run_up {
-                    RunUp::Tangential { length } => {
-                        frac(&mut out, id, "run_up length", length, 10.0)
-                    }
-                    RunUp::Circular { radius } => frac(&mut out, id, "run_up radius", radius, 10.0),
-                }
+                c.range(
+                    at!["methods", i, "boundary", "stepover"],
+                    &p,
+                    "boundary.stepover",
+                    b.stepover,
+                    Range::closed(0.01, 0.5),
+                    of_d,
+                );
+                c.range(
+                    at!["methods", i, "boundary", "depth"],
+                    &p,
+                    "boundary.depth",
+                    b.depth,
+                    depth,
+                    of_d,
+                );
+                run_up(c, at!["methods", i, "boundary", "run_up"], &p, b.run_up);
             } else if matches!(
                 m.applies.sides,
                 SidesMatch::PartiallyOpen | SidesMatch::Closed | SidesMatch::Any
             ) {
-                out.push(format!(
-                    "method `{id}`: applies to features with product sides but has no boundary \
-                     region (product edges would be finished with roughing conditions)"
-                ));
+                c.push(
+                    here("boundary"),
+                    format!(
+                        "method `{id}`: applies to features with product sides but has no \
+                         boundary region (product edges would be finished with roughing \
+                         conditions)"
+                    ),
+                );
             }
             match m.full_cut {
                 FullCut::Never => {}
                 FullCut::Always { depth_factor }
-                | FullCut::WhenFewerSidePasses { depth_factor } => {
-                    frac(&mut out, id, "full_cut depth_factor", depth_factor, 1.0)
-                }
+                | FullCut::WhenFewerSidePasses { depth_factor } => c.range(
+                    at!["methods", i, "full_cut", "depth_factor"],
+                    &p,
+                    "full_cut depth_factor",
+                    depth_factor,
+                    Range::closed(0.01, 1.0),
+                    " (fraction of the rest depth)",
+                ),
             }
             if let Some(b) = &m.bottom_layer {
-                if !(b.thickness.is_finite() && b.thickness > 0.0) {
-                    out.push(format!(
-                        "method `{id}`: bottom_layer thickness {} must be positive",
-                        b.thickness
-                    ));
-                }
-                frac(&mut out, id, "bottom_layer stepover", b.stepover, 1.0);
+                c.range(
+                    at!["methods", i, "bottom_layer", "thickness"],
+                    &p,
+                    "bottom_layer thickness",
+                    b.thickness,
+                    Range::closed(0.01, 100.0),
+                    " mm",
+                );
+                c.range(
+                    at!["methods", i, "bottom_layer", "stepover"],
+                    &p,
+                    "bottom_layer stepover",
+                    b.stepover,
+                    stepover,
+                    of_d,
+                );
                 if b.pattern.is_spiral() != m.pattern.is_spiral() {
-                    out.push(format!(
-                        "method `{id}`: bottom_layer pattern {:?} must be of the same family \
-                         (spiral or parallel passes) as the method's {:?}",
-                        b.pattern, m.pattern
-                    ));
+                    c.push(
+                        at!["methods", i, "bottom_layer", "pattern"],
+                        format!(
+                            "method `{id}`: bottom_layer pattern {:?} must be of the same family \
+                             (spiral or parallel passes) as the method's {:?}",
+                            b.pattern, m.pattern
+                        ),
+                    );
                 }
             } else if m.applies.bottom == BottomMatch::Product {
-                out.push(format!(
-                    "method `{id}`: applies to product floors but has no bottom_layer"
-                ));
+                c.push(
+                    here("bottom_layer"),
+                    format!("method `{id}`: applies to product floors but has no bottom_layer"),
+                );
             }
             if let Some(r) = &m.rest_pass {
-                if !(r.min_corner_gain.is_finite() && r.min_corner_gain > 0.0) {
-                    out.push(format!(
-                        "method `{id}`: rest_pass min_corner_gain {} must be positive",
-                        r.min_corner_gain
-                    ));
-                }
+                c.range(
+                    at!["methods", i, "rest_pass", "min_corner_gain"],
+                    &p,
+                    "rest_pass min_corner_gain",
+                    r.min_corner_gain,
+                    Range::above(0.0, 100.0),
+                    " mm",
+                );
+                run_up(c, at!["methods", i, "rest_pass", "run_up"], &p, r.run_up);
                 if m.applies.bottom == BottomMatch::NotProduct {
-                    out.push(format!(
-                        "method `{id}`: a rest_pass finishes product floors, but the method \
-                         applies to features without one"
-                    ));
+                    c.push(
+                        here("rest_pass"),
+                        format!(
+                            "method `{id}`: a rest_pass finishes product floors, but the method \
+                             applies to features without one"
+                        ),
+                    );
                 }
             }
             if let Some(w) = &m.wall_rest {
-                if !(w.min_left.is_finite() && w.min_left > 0.0) {
-                    out.push(format!(
-                        "method `{id}`: wall_rest min_left {} must be positive",
-                        w.min_left
-                    ));
-                }
+                c.range(
+                    at!["methods", i, "wall_rest", "min_left"],
+                    &p,
+                    "wall_rest min_left",
+                    w.min_left,
+                    Range::above(0.0, 100.0),
+                    " mm",
+                );
+                run_up(c, at!["methods", i, "wall_rest", "run_up"], &p, w.run_up);
                 if m.boundary.is_none() {
-                    out.push(format!(
-                        "method `{id}`: a wall_rest finishes product walls, but the method \
-                         has no boundary region (no product sides)"
-                    ));
+                    c.push(
+                        here("wall_rest"),
+                        format!(
+                            "method `{id}`: a wall_rest finishes product walls, but the method \
+                             has no boundary region (no product sides)"
+                        ),
+                    );
                 }
             }
+            // A ramp is depth / tan(angle) long: 0.5° keeps it under 115 · depth.
             let a = m.entry.angle_deg();
-            if !(a.is_finite() && a > 0.0 && a <= 45.0) {
-                out.push(format!(
-                    "method `{id}`: entry angle {a}° must lie in (0, 45] (no plunges)"
-                ));
+            if !Range::closed(0.5, 45.0).contains(a) {
+                c.push(
+                    at!["methods", i, "entry", "angle_deg"],
+                    format!("method `{id}`: entry angle {a}° must lie in [0.5, 45] (no plunges)"),
+                );
             }
             if let LevelEntry::Helix { radius, .. } = m.entry {
-                frac(&mut out, id, "helix radius", radius, 5.0);
+                c.range(
+                    at!["methods", i, "entry", "radius"],
+                    &p,
+                    "helix radius",
+                    radius,
+                    Range::above(0.0, 5.0),
+                    of_d,
+                );
             }
-            if !(m.overhang.open.is_finite() && m.overhang.open >= 0.0) {
-                out.push(format!(
-                    "method `{id}`: overhang.open {} must be ≥ 0",
-                    m.overhang.open
-                ));
+            c.range(
+                at!["methods", i, "overhang", "open"],
+                &p,
+                "overhang.open",
+                m.overhang.open,
+                Range::closed(0.0, 10.0),
+                of_d,
+            );
+            c.range(
+                at!["methods", i, "overhang", "feature"],
+                &p,
+                "overhang.feature",
+                m.overhang.feature,
+                Range::closed(0.0, 0.5),
+                " (never more than half the tool into a neighbouring feature)",
+            );
+            if let Some(r) = m.tool.corner_ratio {
+                c.range(
+                    at!["methods", i, "tool", "corner_ratio"],
+                    &p,
+                    "tool.corner_ratio",
+                    r,
+                    Range::above(0.0, 1.0),
+                    "",
+                );
             }
-            if !(m.overhang.feature.is_finite() && (0.0..=0.5).contains(&m.overhang.feature)) {
-                out.push(format!(
-                    "method `{id}`: overhang.feature {} must lie in 0..=0.5 (never more than \
-                     half the tool into a neighbouring feature)",
-                    m.overhang.feature
-                ));
-            }
-            if let Some(c) = m.tool.corner_ratio {
-                frac(&mut out, id, "tool.corner_ratio", c, 1.0);
-            }
-            if !(m.corner_rounding.is_finite() && (0.0..=0.5).contains(&m.corner_rounding)) {
-                out.push(format!(
-                    "method `{id}`: corner_rounding {} must lie in 0..=0.5",
-                    m.corner_rounding
-                ));
-            }
+            c.range(
+                here("corner_rounding"),
+                &p,
+                "corner_rounding",
+                m.corner_rounding,
+                Range::closed(0.0, 0.5),
+                of_d,
+            );
             if m.pattern.is_spiral() && m.applies.sides != SidesMatch::Closed {
-                out.push(format!(
-                    "method `{id}`: spiral patterns need a closed profile (sides: Closed)"
-                ));
+                c.push(
+                    here("pattern"),
+                    format!("method `{id}`: spiral patterns need a closed profile (sides: Closed)"),
+                );
             }
             if m.applies.sides == SidesMatch::Closed && !m.pattern.is_spiral() {
-                out.push(format!(
-                    "method `{id}`: a closed profile has no open side to run parallel passes \
-                     out of; use OffsetSpiral or CurvilinearSpiral"
-                ));
+                c.push(
+                    here("pattern"),
+                    format!(
+                        "method `{id}`: a closed profile has no open side to run parallel \
+                         passes out of; use OffsetSpiral or CurvilinearSpiral"
+                    ),
+                );
             }
         }
         // Every feature must find a method.
@@ -533,14 +635,27 @@ impl MethodKnowledge {
                 SidesMatch::Closed,
             ] {
                 if self.for_feature(bottom, sides).is_none() {
-                    out.push(format!(
-                        "no method applies to features with {} bottom and {:?} sides",
-                        if bottom { "a product" } else { "a non-product" },
-                        sides
-                    ));
+                    c.push(
+                        at!["methods"],
+                        format!(
+                            "no method applies to features with {} bottom and {:?} sides",
+                            if bottom { "a product" } else { "a non-product" },
+                            sides
+                        ),
+                    );
                 }
             }
         }
-        out
     }
+}
+
+/// A run-up's size (fraction of D).
+fn run_up(c: &mut Checks, at: Vec<Seg>, p: &str, r: RunUp) {
+    let (name, field, v) = match r {
+        RunUp::Tangential { length } => ("run_up length", "length", length),
+        RunUp::Circular { radius } => ("run_up radius", "radius", radius),
+    };
+    let mut at = at;
+    at.push(Seg::Field(field));
+    c.range(at, p, name, v, Range::above(0.0, 10.0), " (fraction of D)");
 }

@@ -8,6 +8,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::at;
+use crate::check::Checks;
+
 /// Placeholders known in every template.
 pub const PROGRAM_PLACEHOLDERS: &[&str] = &[
     "part",        // the part's source as the user gave it
@@ -208,10 +211,16 @@ impl PostProcessor {
     /// Problems a parser cannot find: unknown placeholders, bad numbers,
     /// empty words. Each sentence names the post and the field.
     pub fn problems(&self) -> Vec<String> {
-        let mut out = Vec::new();
+        let mut c = Checks::default();
+        self.checks(&mut c);
+        c.messages()
+    }
+
+    /// The problems, each at its place in the post's file.
+    pub fn checks(&self, c: &mut Checks) {
         let name = format!("post `{}`", self.id);
         if self.id.is_empty() {
-            out.push("a post has an empty id".to_string());
+            c.push(at!["id"], "a post has an empty id".to_string());
         }
         let program: Vec<&str> = PROGRAM_PLACEHOLDERS.to_vec();
         let operation: Vec<&str> = PROGRAM_PLACEHOLDERS
@@ -219,7 +228,7 @@ impl PostProcessor {
             .chain(OPERATION_PLACEHOLDERS)
             .copied()
             .collect();
-        let lists: [(&str, &Vec<Block>, &Vec<&str>); 10] = [
+        let lists: [(&'static str, &Vec<Block>, &Vec<&str>); 10] = [
             ("header", &self.header, &program),
             ("program_start", &self.program_start, &program),
             ("safe_retract", &self.safe_retract, &program),
@@ -235,12 +244,13 @@ impl PostProcessor {
             for (i, b) in blocks.iter().enumerate() {
                 let text = b.text();
                 if text.contains(['\n', '\r']) {
-                    out.push(format!(
-                        "{name}: {field}[{i}] spans lines; write one block per line"
-                    ));
+                    c.push(
+                        at![field, i],
+                        format!("{name}: {field}[{i}] spans lines; write one block per line"),
+                    );
                 }
                 match placeholders(text) {
-                    Err(e) => out.push(format!("{name}: {field}[{i}]: {e}")),
+                    Err(e) => c.push(at![field, i], format!("{name}: {field}[{i}]: {e}")),
                     Ok(ps) => {
                         for p in ps {
                             if !known.contains(&p) {
@@ -251,9 +261,12 @@ impl PostProcessor {
                                 } else {
                                     format!(" (known here: {})", known.join(", "))
                                 };
-                                out.push(format!(
-                                    "{name}: {field}[{i}]: unknown placeholder `{{{p}}}`{hint}"
-                                ));
+                                c.push(
+                                    at![field, i],
+                                    format!(
+                                        "{name}: {field}[{i}]: unknown placeholder `{{{p}}}`{hint}"
+                                    ),
+                                );
                             }
                         }
                     }
@@ -261,74 +274,95 @@ impl PostProcessor {
             }
         }
         if self.tool_change.is_empty() {
-            out.push(format!("{name}: tool_change is empty"));
+            c.push(at!["tool_change"], format!("{name}: tool_change is empty"));
         }
         if self.extension.is_empty() || self.extension.contains(['.', '/', '\\']) {
-            out.push(format!(
-                "{name}: extension `{}` must be a bare name like `ngc`",
-                self.extension
-            ));
+            c.push(
+                at!["extension"],
+                format!(
+                    "{name}: extension `{}` must be a bare name like `ngc`",
+                    self.extension
+                ),
+            );
         }
         if self.decimals > 6 || self.decimals == 0 {
-            out.push(format!(
-                "{name}: decimals {} is outside 1..=6",
-                self.decimals
-            ));
+            c.push(
+                at!["decimals"],
+                format!("{name}: decimals {} is outside 1..=6", self.decimals),
+            );
         }
         if self.feed_decimals > 4 {
-            out.push(format!(
-                "{name}: feed_decimals {} is outside 0..=4",
-                self.feed_decimals
-            ));
+            c.push(
+                at!["feed_decimals"],
+                format!(
+                    "{name}: feed_decimals {} is outside 0..=4",
+                    self.feed_decimals
+                ),
+            );
         }
         if self.line_numbers.enabled && self.line_numbers.step == 0 {
-            out.push(format!("{name}: line_numbers.step must be at least 1"));
+            c.push(
+                at!["line_numbers", "step"],
+                format!("{name}: line_numbers.step must be at least 1"),
+            );
         }
         let m = &self.motion;
-        for (w, v) in [
+        let words: [(&'static str, &String); 5] = [
             ("rapid", &m.rapid),
             ("linear", &m.linear),
             ("arc_cw", &m.arc_cw),
             ("arc_ccw", &m.arc_ccw),
             ("feed", &m.feed),
-        ] {
+        ];
+        for (w, v) in words {
             if v.trim().is_empty() {
-                out.push(format!("{name}: motion.{w} is empty"));
+                c.push(at!["motion", w], format!("{name}: motion.{w} is empty"));
             }
         }
         if !(self.clearance.is_finite() && self.clearance > 0.0) {
-            out.push(format!(
-                "{name}: clearance must be a positive number, not {}",
-                self.clearance
-            ));
+            c.push(
+                at!["clearance"],
+                format!(
+                    "{name}: clearance must be a positive number, not {}",
+                    self.clearance
+                ),
+            );
         }
         let a = &self.arcs;
         if !(a.chord_tolerance.is_finite() && a.chord_tolerance > 0.0) {
-            out.push(format!(
-                "{name}: arcs.chord_tolerance must be a positive number, not {}",
-                a.chord_tolerance
-            ));
+            c.push(
+                at!["arcs", "chord_tolerance"],
+                format!(
+                    "{name}: arcs.chord_tolerance must be a positive number, not {}",
+                    a.chord_tolerance
+                ),
+            );
         }
         let unit = 10f64.powi(-(self.decimals.min(6) as i32));
         if a.chord_tolerance > 0.0 && a.chord_tolerance < unit {
-            out.push(format!(
-                "{name}: arcs.chord_tolerance {} is finer than the output resolution {unit}",
-                a.chord_tolerance
-            ));
+            c.push(
+                at!["arcs", "chord_tolerance"],
+                format!(
+                    "{name}: arcs.chord_tolerance {} is finer than the output resolution {unit}",
+                    a.chord_tolerance
+                ),
+            );
         }
         if !(a.min_radius.is_finite() && a.min_radius >= 0.0) {
-            out.push(format!(
-                "{name}: arcs.min_radius must be ≥ 0, not {}",
-                a.min_radius
-            ));
+            c.push(
+                at!["arcs", "min_radius"],
+                format!("{name}: arcs.min_radius must be ≥ 0, not {}", a.min_radius),
+            );
         }
         if !(a.max_radius.is_finite() && a.max_radius > a.min_radius) {
-            out.push(format!(
-                "{name}: arcs.max_radius {} must exceed min_radius {}",
-                a.max_radius, a.min_radius
-            ));
+            c.push(
+                at!["arcs", "max_radius"],
+                format!(
+                    "{name}: arcs.max_radius {} must exceed min_radius {}",
+                    a.max_radius, a.min_radius
+                ),
+            );
         }
-        out
     }
 }
 

@@ -16,6 +16,9 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use crate::at;
+use crate::check::{Checks, Seg};
+
 /// The name of the sequencing file at the knowledge root.
 pub const SEQUENCING_FILE: &str = "sequencing.ron";
 
@@ -165,78 +168,104 @@ impl SequencingKnowledge {
     /// Problems a parser cannot find: duplicate ids and priorities, empty
     /// ids and lists, numbers out of range. Each names the rule.
     pub fn problems(&self) -> Vec<String> {
-        let mut out = Vec::new();
+        let mut c = Checks::default();
+        self.checks(&mut c);
+        c.messages()
+    }
+
+    /// The problems, each at its place in `sequencing.ron`.
+    pub fn checks(&self, c: &mut Checks) {
         let mut ids: BTreeMap<&str, usize> = BTreeMap::new();
         let mut priorities: BTreeMap<i32, &str> = BTreeMap::new();
         for (i, r) in self.rules.iter().enumerate() {
             let name = if r.id.is_empty() {
-                out.push(format!("rule #{} has an empty id", i + 1));
+                c.push(
+                    at!["rules", i, "id"],
+                    format!("rule #{} has an empty id", i + 1),
+                );
                 format!("#{}", i + 1)
             } else {
                 format!("`{}`", r.id)
             };
             if !r.id.is_empty() && ids.insert(&r.id, i).is_some() {
-                out.push(format!("rule {name}: duplicate id"));
+                c.push(at!["rules", i, "id"], format!("rule {name}: duplicate id"));
             }
             if let Some(other) = priorities.insert(r.priority, &r.id) {
-                out.push(format!(
-                    "rule {name}: duplicate priority {} (also rule `{other}`): \
-                     priorities must be unique so the order of application is defined",
-                    r.priority
-                ));
+                c.push(
+                    at!["rules", i, "priority"],
+                    format!(
+                        "rule {name}: duplicate priority {} (also rule `{other}`): \
+                         priorities must be unique so the order of application is defined",
+                        r.priority
+                    ),
+                );
             }
-            let mut problems = Vec::new();
-            condition_problems(&r.when, &mut problems);
-            if let SequenceAction::BeforeUnless(c) = &r.then {
-                condition_problems(c, &mut problems);
+            let mut problems = Checks::default();
+            condition_problems(&r.when, at!["rules", i, "when"], &mut problems);
+            if let SequenceAction::BeforeUnless(cond) = &r.then {
+                condition_problems(cond, at!["rules", i, "then"], &mut problems);
             }
-            for p in problems {
-                out.push(format!("rule {name}: {p}"));
+            for p in problems.out {
+                c.push(p.at, format!("rule {name}: {}", p.message));
             }
         }
-        out
     }
 }
 
-fn test_problems(t: &FeatureTest, out: &mut Vec<String>) {
+fn test_problems(t: &FeatureTest, at: Vec<Seg>, c: &mut Checks) {
     match t {
-        FeatureTest::Kind(k) if k.is_empty() => out.push("`Kind([])` matches nothing".into()),
-        FeatureTest::Role(r) if r.is_empty() => out.push("`Role([])` matches nothing".into()),
+        FeatureTest::Kind(k) if k.is_empty() => c.push(at, "`Kind([])` matches nothing".into()),
+        FeatureTest::Role(r) if r.is_empty() => c.push(at, "`Role([])` matches nothing".into()),
         _ => {}
     }
 }
 
-fn condition_problems(c: &PairCondition, out: &mut Vec<String>) {
-    match c {
+fn with(at: &[Seg], s: Seg) -> Vec<Seg> {
+    let mut v = at.to_vec();
+    v.push(s);
+    v
+}
+
+fn condition_problems(cond: &PairCondition, at: Vec<Seg>, c: &mut Checks) {
+    match cond {
         PairCondition::All(v) | PairCondition::Any(v) => {
             if v.is_empty() {
-                out.push("an empty `All`/`Any` list (write the condition out)".into());
+                c.push(
+                    at.clone(),
+                    "an empty `All`/`Any` list (write the condition out)".into(),
+                );
             }
-            for c in v {
-                condition_problems(c, out);
+            for (i, x) in v.iter().enumerate() {
+                condition_problems(x, with(&at, Seg::Index(i)), c);
             }
         }
-        PairCondition::Not(c) => condition_problems(c, out),
-        PairCondition::First(t) | PairCondition::Second(t) => test_problems(t, out),
+        // `Not(…)`, `First(…)` are looked through by the locator.
+        PairCondition::Not(x) => condition_problems(x, at, c),
+        PairCondition::First(t) | PairCondition::Second(t) => test_problems(t, at, c),
         PairCondition::Related(_) => {}
         PairCondition::Higher { by_more_than, .. } => {
             if !by_more_than.is_finite() || *by_more_than < 0.0 {
-                out.push(format!(
-                    "`Higher.by_more_than` must be a number ≥ 0 mm, not {by_more_than}"
-                ));
+                c.push(
+                    with(&at, Seg::Field("by_more_than")),
+                    format!("`Higher.by_more_than` must be a number ≥ 0 mm, not {by_more_than}"),
+                );
             }
         }
         PairCondition::Junction { within_deg, .. } => {
             if !(within_deg.is_finite() && (0.0..=45.0).contains(within_deg)) {
-                out.push(format!(
-                    "`Junction.within_deg` must lie in 0..=45 degrees, not {within_deg}"
-                ));
+                c.push(
+                    with(&at, Seg::Field("within_deg")),
+                    format!("`Junction.within_deg` must lie in 0..=45 degrees, not {within_deg}"),
+                );
             }
         }
         PairCondition::SecondHasLeavesBefore { leaf, at_least } => {
-            test_problems(leaf, out);
+            test_problems(leaf, with(&at, Seg::Field("leaf")), c);
             if *at_least == 0 {
-                out.push("`SecondHasLeavesBefore.at_least` 0 always holds".into());
+                c.push(
+                    with(&at, Seg::Field("at_least")),
+                    "`SecondHasLeavesBefore.at_least` 0 always holds".into(),
+                );
             }
         }
     }

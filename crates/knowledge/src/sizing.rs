@@ -6,6 +6,10 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::at;
+use crate::check::{Checks, Range, Seg};
+use crate::TOOL_DIAMETER;
+
 /// Everything the sizing model needs besides the wall and the material.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -110,102 +114,201 @@ impl TallWallRule {
 impl SizingKnowledge {
     /// Problems with the values, one message each (empty: valid).
     pub fn problems(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        let mut positive = |name: &str, v: f64| {
-            if !(v.is_finite() && v > 0.0) {
-                out.push(format!("`{name}` must be a positive number, not {v}"));
-            }
-        };
-        positive("allowed_deflection", self.allowed_deflection);
-        positive("effective_length_factor", self.effective_length_factor);
-        positive("max_milling_force", self.max_milling_force);
-        positive("preferred_tool_diameter", self.preferred_tool_diameter);
-        positive(
-            "width_rule_of_thumb.max_height_to_stepped_thickness",
-            self.width_rule_of_thumb.max_height_to_stepped_thickness,
-        );
-        let p = &self.peripheral;
-        positive("peripheral.danger_zone_factor", p.danger_zone_factor);
-        positive(
-            "peripheral.finishing_width_of_cut",
-            p.finishing_width_of_cut,
-        );
-        positive("peripheral.roughing_stepover", p.roughing_stepover);
-        positive(
-            "peripheral.finishing_depth_of_cut",
-            p.finishing_depth_of_cut,
-        );
-        let f = &self.face;
-        positive("face.danger_zone_factor", f.danger_zone_factor);
-        positive("face.finishing_depth_of_cut", f.finishing_depth_of_cut);
-        positive("face.roughing_depth_of_cut", f.roughing_depth_of_cut);
-        positive(
-            "face.finishing_width_of_cut_factor",
-            f.finishing_width_of_cut_factor,
-        );
-        if !(f.finishing_width_of_cut_extra.is_finite() && f.finishing_width_of_cut_extra >= 0.0) {
-            out.push(format!(
-                "`face.finishing_width_of_cut_extra` must be zero or positive, not {}",
-                f.finishing_width_of_cut_extra
-            ));
+        let mut c = Checks::default();
+        self.checks(&mut c);
+        c.messages()
+    }
+
+    /// Problems with the values, each at its place in `sizing.ron`. Lower
+    /// bounds on steps (depths and widths of cut, ≥ 0.01 mm) keep the
+    /// number of heights and widths tried over a 1 m wall at most 10⁵.
+    pub fn checks(&self, c: &mut Checks) {
+        let step = Range::closed(0.01, 1000.0);
+        let factor = Range::above(0.0, 100.0);
+        let fields: [(Vec<Seg>, &str, f64, Range, &str); 14] = [
+            (
+                at!["allowed_deflection"],
+                "`allowed_deflection`",
+                self.allowed_deflection,
+                Range::above(0.0, 10.0),
+                " mm",
+            ),
+            (
+                at!["effective_length_factor"],
+                "`effective_length_factor`",
+                self.effective_length_factor,
+                factor,
+                "",
+            ),
+            (
+                at!["max_milling_force"],
+                "`max_milling_force`",
+                self.max_milling_force,
+                Range::above(0.0, 1e5),
+                " N",
+            ),
+            (
+                at!["preferred_tool_diameter"],
+                "`preferred_tool_diameter`",
+                self.preferred_tool_diameter,
+                TOOL_DIAMETER,
+                " mm",
+            ),
+            (
+                at!["width_rule_of_thumb", "max_height_to_stepped_thickness"],
+                "`width_rule_of_thumb.max_height_to_stepped_thickness`",
+                self.width_rule_of_thumb.max_height_to_stepped_thickness,
+                Range::above(0.0, 1000.0),
+                "",
+            ),
+            (
+                at!["peripheral", "danger_zone_factor"],
+                "`peripheral.danger_zone_factor`",
+                self.peripheral.danger_zone_factor,
+                Range::above(0.0, 10.0),
+                " (fraction of D)",
+            ),
+            (
+                at!["peripheral", "finishing_width_of_cut"],
+                "`peripheral.finishing_width_of_cut`",
+                self.peripheral.finishing_width_of_cut,
+                step,
+                " mm",
+            ),
+            (
+                at!["peripheral", "roughing_stepover"],
+                "`peripheral.roughing_stepover`",
+                self.peripheral.roughing_stepover,
+                Range::closed(0.01, 1.0),
+                " (a fraction of the tool diameter)",
+            ),
+            (
+                at!["peripheral", "finishing_depth_of_cut"],
+                "`peripheral.finishing_depth_of_cut`",
+                self.peripheral.finishing_depth_of_cut,
+                step,
+                " mm",
+            ),
+            (
+                at!["face", "danger_zone_factor"],
+                "`face.danger_zone_factor`",
+                self.face.danger_zone_factor,
+                Range::above(0.0, 10.0),
+                " (fraction of D)",
+            ),
+            (
+                at!["face", "finishing_depth_of_cut"],
+                "`face.finishing_depth_of_cut`",
+                self.face.finishing_depth_of_cut,
+                step,
+                " mm",
+            ),
+            (
+                at!["face", "roughing_depth_of_cut"],
+                "`face.roughing_depth_of_cut`",
+                self.face.roughing_depth_of_cut,
+                step,
+                " mm",
+            ),
+            (
+                at!["face", "finishing_width_of_cut_factor"],
+                "`face.finishing_width_of_cut_factor`",
+                self.face.finishing_width_of_cut_factor,
+                Range::closed(0.01, 10.0),
+                " (fraction of D)",
+            ),
+            (
+                at!["face", "finishing_width_of_cut_extra"],
+                "`face.finishing_width_of_cut_extra`",
+                self.face.finishing_width_of_cut_extra,
+                Range::closed(0.0, 1000.0),
+                " mm",
+            ),
+        ];
+        for (at, name, v, r, unit) in fields {
+            c.range(at, "", name, v, r, unit);
         }
-        if p.roughing_stepover > 1.0 {
-            out.push(format!(
-                "`peripheral.roughing_stepover` is a fraction of the tool diameter and must lie in (0, 1], not {}",
-                p.roughing_stepover
-            ));
-        }
-        if self.initial_height_ratio < 1 {
-            out.push("`initial_height_ratio` (H/h) must be at least 1".into());
-        }
-        for (mode, initial, min, max) in [
+        c.count(
+            at!["initial_height_ratio"],
+            "",
+            "`initial_height_ratio` (H/h)",
+            self.initial_height_ratio,
+            1,
+            100,
+        );
+        for (mode, s) in [
             (
                 "peripheral",
-                p.initial_finishing_cuts_in_h,
-                p.min_cuts_in_width,
-                p.max_cuts_in_width,
+                (
+                    self.peripheral.initial_finishing_cuts_in_h,
+                    self.peripheral.min_cuts_in_width,
+                    self.peripheral.max_cuts_in_width,
+                ),
             ),
             (
                 "face",
-                f.initial_finishing_cuts_in_h,
-                f.min_cuts_in_width,
-                f.max_cuts_in_width,
+                (
+                    self.face.initial_finishing_cuts_in_h,
+                    self.face.min_cuts_in_width,
+                    self.face.max_cuts_in_width,
+                ),
             ),
         ] {
-            if initial < 1 {
-                out.push(format!(
-                    "`{mode}.initial_finishing_cuts_in_h` must be at least 1"
-                ));
-            }
-            if min < 1 {
-                out.push(format!("`{mode}.min_cuts_in_width` must be at least 1"));
-            }
-            if max < min {
-                out.push(format!(
-                    "`{mode}.max_cuts_in_width` ({max}) is below `{mode}.min_cuts_in_width` ({min})"
-                ));
-            }
+            let (initial, min, max) = s;
+            c.count(
+                at![mode, "initial_finishing_cuts_in_h"],
+                "",
+                &format!("`{mode}.initial_finishing_cuts_in_h`"),
+                initial,
+                1,
+                1000,
+            );
+            c.count(
+                at![mode, "min_cuts_in_width"],
+                "",
+                &format!("`{mode}.min_cuts_in_width`"),
+                min,
+                1,
+                1000,
+            );
+            c.count(
+                at![mode, "max_cuts_in_width"],
+                "",
+                &format!("`{mode}.max_cuts_in_width`"),
+                max,
+                min.max(1),
+                1000,
+            );
         }
         if let Some(t) = &self.tall_wall {
-            if !(t.tall_above_h_multiple.is_finite() && t.tall_above_h_multiple >= 1.0) {
-                out.push(format!(
-                    "`tall_wall.tall_above_h_multiple` must be at least 1, not {}",
-                    t.tall_above_h_multiple
-                ));
-            }
-            if !(t.max_big_h_over_h.is_finite() && t.max_big_h_over_h >= 1.0) {
-                out.push(format!(
-                    "`tall_wall.max_big_h_over_h` must be at least 1 (H ≥ h), not {}",
-                    t.max_big_h_over_h
-                ));
+            c.range(
+                at!["tall_wall", "tall_above_h_multiple"],
+                "",
+                "`tall_wall.tall_above_h_multiple`",
+                t.tall_above_h_multiple,
+                Range::closed(1.0, 1000.0),
+                "",
+            );
+            let r = Range::closed(1.0, 1000.0);
+            if !r.contains(t.max_big_h_over_h) {
+                c.range(
+                    at!["tall_wall", "max_big_h_over_h"],
+                    "",
+                    "`tall_wall.max_big_h_over_h`",
+                    t.max_big_h_over_h,
+                    r,
+                    " (H ≥ h)",
+                );
             } else if f64::from(self.initial_height_ratio) > t.max_big_h_over_h {
-                out.push(format!(
-                    "`initial_height_ratio` ({}) exceeds `tall_wall.max_big_h_over_h` ({}): \
-                     the initial sizes would break the tall-wall rule",
-                    self.initial_height_ratio, t.max_big_h_over_h
-                ));
+                c.push(
+                    at!["initial_height_ratio"],
+                    format!(
+                        "`initial_height_ratio` ({}) exceeds `tall_wall.max_big_h_over_h` ({}): \
+                         the initial sizes would break the tall-wall rule",
+                        self.initial_height_ratio, t.max_big_h_over_h
+                    ),
+                );
             }
         }
-        out
     }
 }

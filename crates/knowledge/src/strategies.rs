@@ -14,6 +14,9 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use crate::at;
+use crate::check::{Checks, Range};
+
 /// The name of the strategies file at the knowledge root.
 pub const STRATEGIES_FILE: &str = "strategies.ron";
 
@@ -231,98 +234,151 @@ impl StrategyKnowledge {
     /// Problems a parser cannot find: duplicate ids, roles in two
     /// strategies, blocks in the wrong strategy or order, bad numbers.
     pub fn problems(&self) -> Vec<String> {
-        let mut out = Vec::new();
+        let mut c = Checks::default();
+        self.checks(&mut c);
+        c.messages()
+    }
+
+    /// The problems, each at its place in `strategies.ron`.
+    pub fn checks(&self, c: &mut Checks) {
         let mut ids: BTreeMap<&str, ()> = BTreeMap::new();
         let mut block_ids: BTreeMap<&str, &str> = BTreeMap::new();
         let mut roles: BTreeMap<StrategyRole, &str> = BTreeMap::new();
         for (i, s) in self.strategies.iter().enumerate() {
             let name = if s.id.is_empty() {
-                out.push(format!("strategy #{} has an empty id", i + 1));
+                c.push(
+                    at!["strategies", i, "id"],
+                    format!("strategy #{} has an empty id", i + 1),
+                );
                 format!("#{}", i + 1)
             } else {
                 format!("`{}`", s.id)
             };
             if !s.id.is_empty() && ids.insert(&s.id, ()).is_some() {
-                out.push(format!("strategy {name}: duplicate id"));
+                c.push(
+                    at!["strategies", i, "id"],
+                    format!("strategy {name}: duplicate id"),
+                );
             }
             if s.roles.is_empty() {
-                out.push(format!("strategy {name}: applies to no role"));
+                c.push(
+                    at!["strategies", i, "roles"],
+                    format!("strategy {name}: applies to no role"),
+                );
             }
-            for r in &s.roles {
+            for (k, r) in s.roles.iter().enumerate() {
                 if let Some(other) = roles.insert(*r, &s.id) {
-                    out.push(format!(
-                        "strategy {name}: role {r:?} already has strategy `{other}`"
-                    ));
+                    c.push(
+                        at!["strategies", i, "roles", k],
+                        format!("strategy {name}: role {r:?} already has strategy `{other}`"),
+                    );
                 }
             }
             let web = s.roles.contains(&StrategyRole::Web);
             let standing = s.roles.iter().any(|r| *r != StrategyRole::Web);
             let mut seen_steps = false;
-            for b in &s.blocks {
+            for (j, b) in s.blocks.iter().enumerate() {
                 let bid = b.id();
+                let here = |f: &'static str| at!["strategies", i, "blocks", j, f];
+                let block = at!["strategies", i, "blocks", j];
+                let p = format!("block `{bid}`: ");
                 if bid.is_empty() {
-                    out.push(format!("strategy {name}: a block has an empty id"));
+                    c.push(
+                        here("id"),
+                        format!("strategy {name}: a block has an empty id"),
+                    );
                 } else if let Some(other) = block_ids.insert(bid, &s.id) {
-                    out.push(format!(
-                        "strategy {name}: block id `{bid}` is also used in strategy `{other}`"
-                    ));
+                    c.push(
+                        here("id"),
+                        format!(
+                            "strategy {name}: block id `{bid}` is also used in strategy `{other}`"
+                        ),
+                    );
                 }
                 match b {
-                    Block::SideChoice(c) => {
+                    Block::SideChoice(sc) => {
                         if seen_steps {
-                            out.push(format!(
-                                "strategy {name}: side choice `{bid}` comes after the wall steps \
-                                 it should decide"
-                            ));
+                            c.push(
+                                block.clone(),
+                                format!(
+                                    "strategy {name}: side choice `{bid}` comes after the wall \
+                                     steps it should decide"
+                                ),
+                            );
                         }
-                        if c.criteria.is_empty() {
-                            out.push(format!("block `{bid}`: no criteria"));
+                        if sc.criteria.is_empty() {
+                            c.push(here("criteria"), format!("block `{bid}`: no criteria"));
                         }
-                        for cr in &c.criteria {
+                        for (k, cr) in sc.criteria.iter().enumerate() {
                             match cr {
-                                SideCriterion::UpSide { min_cos_to_up: v } => {
-                                    if !(v.is_finite() && (0.0..=1.0).contains(v)) {
-                                        out.push(format!(
-                                            "block `{bid}`: min_cos_to_up {v} is outside 0..=1"
-                                        ));
-                                    }
-                                }
+                                SideCriterion::UpSide { min_cos_to_up: v } => c.range(
+                                    at![
+                                        "strategies",
+                                        i,
+                                        "blocks",
+                                        j,
+                                        "criteria",
+                                        k,
+                                        "min_cos_to_up"
+                                    ],
+                                    &p,
+                                    "min_cos_to_up",
+                                    *v,
+                                    Range::closed(0.0, 1.0),
+                                    "",
+                                ),
                                 SideCriterion::MostConnected => {}
-                                SideCriterion::MostMaterial { by_more_than: v } => {
-                                    if !(v.is_finite() && *v >= 0.0) {
-                                        out.push(format!(
-                                            "block `{bid}`: by_more_than {v} must be ≥ 0"
-                                        ));
-                                    }
-                                }
+                                SideCriterion::MostMaterial { by_more_than: v } => c.range(
+                                    at![
+                                        "strategies",
+                                        i,
+                                        "blocks",
+                                        j,
+                                        "criteria",
+                                        k,
+                                        "by_more_than"
+                                    ],
+                                    &p,
+                                    "by_more_than",
+                                    *v,
+                                    Range::closed(0.0, 1e5),
+                                    " mm",
+                                ),
                             }
                         }
                     }
                     Block::WallSteps(w) => {
                         seen_steps = true;
                         if web {
-                            out.push(format!(
-                                "strategy {name}: wall steps `{bid}` cannot apply to webs"
-                            ));
+                            c.push(
+                                block.clone(),
+                                format!("strategy {name}: wall steps `{bid}` cannot apply to webs"),
+                            );
                         }
-                        if !(w.width_in_b_rf.is_finite() && w.width_in_b_rf > 0.0) {
-                            out.push(format!(
-                                "block `{bid}`: width_in_b_rf {} must be positive",
-                                w.width_in_b_rf
-                            ));
-                        }
-                        if !(w.min_side_width.is_finite() && w.min_side_width >= 0.0) {
-                            out.push(format!(
-                                "block `{bid}`: min_side_width {} must be ≥ 0",
-                                w.min_side_width
-                            ));
-                        }
-                        if !(w.max_cos_to_up.is_finite() && (0.0..1.0).contains(&w.max_cos_to_up)) {
-                            out.push(format!(
-                                "block `{bid}`: max_cos_to_up {} is outside 0..1",
-                                w.max_cos_to_up
-                            ));
-                        }
+                        c.range(
+                            here("width_in_b_rf"),
+                            &p,
+                            "width_in_b_rf",
+                            w.width_in_b_rf,
+                            Range::above(0.0, 100.0),
+                            " (multiples of B_RF)",
+                        );
+                        c.range(
+                            here("min_side_width"),
+                            &p,
+                            "min_side_width",
+                            w.min_side_width,
+                            Range::closed(0.0, 1e5),
+                            " mm",
+                        );
+                        c.range(
+                            here("max_cos_to_up"),
+                            &p,
+                            "max_cos_to_up",
+                            w.max_cos_to_up,
+                            Range::below(0.0, 1.0),
+                            "",
+                        );
                     }
                     Block::ConnectedWalls(_)
                     | Block::Cutouts(_)
@@ -331,71 +387,79 @@ impl StrategyKnowledge {
                         // Influences on the wall's steps: they must be known
                         // before the steps are made (figure 4.13).
                         if seen_steps {
-                            out.push(format!(
-                                "strategy {name}: `{bid}` comes after the wall steps it \
-                                 should influence"
-                            ));
+                            c.push(
+                                block.clone(),
+                                format!(
+                                    "strategy {name}: `{bid}` comes after the wall steps it \
+                                     should influence"
+                                ),
+                            );
                         }
                         if web {
-                            out.push(format!(
-                                "strategy {name}: `{bid}` applies to standing walls, not webs"
-                            ));
+                            c.push(
+                                block.clone(),
+                                format!(
+                                    "strategy {name}: `{bid}` applies to standing walls, not webs"
+                                ),
+                            );
                         }
-                        let mut check = |what: &str, v: f64, zero_ok: bool| {
-                            if !(v.is_finite() && (v > 0.0 || zero_ok && v == 0.0)) {
-                                out.push(format!(
-                                    "block `{bid}`: {what} {v} must be {}",
-                                    if zero_ok { "≥ 0" } else { "positive" }
-                                ));
+                        let positive = Range::above(0.0, 1000.0);
+                        let zero_ok = Range::closed(0.0, 1000.0);
+                        let fields: Vec<(&'static str, f64, Range)> = match b {
+                            Block::ConnectedWalls(w) => {
+                                vec![("width_in_web_big_h", w.width_in_web_big_h, positive)]
                             }
-                        };
-                        match b {
-                            Block::ConnectedWalls(c) => {
-                                check("width_in_web_big_h", c.width_in_web_big_h, false)
-                            }
-                            Block::Cutouts(c) => {
-                                check("large_deeper_than_h", c.large_deeper_than_h, false);
-                                check(
+                            Block::Cutouts(w) => vec![
+                                ("large_deeper_than_h", w.large_deeper_than_h, positive),
+                                (
                                     "large_below_ligament_ratio",
-                                    c.large_below_ligament_ratio,
-                                    true,
-                                );
-                                check("min_last_piece", c.min_last_piece, true);
-                            }
+                                    w.large_below_ligament_ratio,
+                                    zero_ok,
+                                ),
+                                ("min_last_piece", w.min_last_piece, zero_ok),
+                            ],
                             Block::Details(d) => {
-                                check("large_above_big_h", d.large_above_big_h, false)
+                                vec![("large_above_big_h", d.large_above_big_h, positive)]
                             }
-                            Block::LargeHoles(h) => {
-                                check(
+                            Block::LargeHoles(h) => vec![
+                                (
                                     "large_above_tool_diameters",
                                     h.large_above_tool_diameters,
-                                    false,
-                                );
-                                check(
+                                    positive,
+                                ),
+                                (
                                     "separation_in_tool_diameters",
                                     h.separation_in_tool_diameters,
-                                    false,
-                                );
-                            }
-                            _ => {}
+                                    positive,
+                                ),
+                            ],
+                            _ => Vec::new(),
+                        };
+                        for (f, v, r) in fields {
+                            c.range(here(f), &p, f, v, r, "");
                         }
                     }
                     Block::WebFaceMill(f) => {
                         if standing {
-                            out.push(format!(
-                                "strategy {name}: web face milling `{bid}` applies to webs only"
-                            ));
+                            c.push(
+                                block.clone(),
+                                format!(
+                                    "strategy {name}: web face milling `{bid}` applies to webs only"
+                                ),
+                            );
                         }
-                        if !(f.layer_depth.is_finite() && f.layer_depth > 0.0) {
-                            out.push(format!(
-                                "block `{bid}`: layer_depth {} must be positive",
-                                f.layer_depth
-                            ));
-                        }
+                        // At least 0.01 mm: at most 10⁵ layers over 1 m.
+                        c.range(
+                            here("layer_depth"),
+                            &p,
+                            "layer_depth",
+                            f.layer_depth,
+                            Range::closed(0.01, 1000.0),
+                            " mm",
+                        );
                     }
                 }
             }
         }
-        out
     }
 }

@@ -100,7 +100,7 @@ fn all_problems_are_reported_in_one_run() {
     assert!(all.iter().any(|m| m.contains("broken.ron:")), "{all:?}");
     assert!(
         all.iter()
-            .any(|m| m.contains("`diameter` must be a positive")),
+            .any(|m| m.contains("diameter -12 must lie in [0.2, 250]")),
         "{all:?}"
     );
 }
@@ -163,12 +163,12 @@ fn bad_sizing_values_are_refused_with_clear_messages() {
     assert_eq!(all.len(), 3, "{all:?}");
     assert!(
         all.iter()
-            .any(|m| m.contains("`allowed_deflection` must be a positive number")),
+            .any(|m| m.contains("`allowed_deflection` -0.01 must lie in (0, 10]")),
         "{all:?}"
     );
     assert!(
         all.iter()
-            .any(|m| m.contains("`peripheral.roughing_stepover`") && m.contains("(0, 1]")),
+            .any(|m| m.contains("`peripheral.roughing_stepover` 1.5") && m.contains("[0.01, 1]")),
         "{all:?}"
     );
     assert!(
@@ -361,7 +361,7 @@ fn broken_methods_are_refused_with_every_problem() {
         "{text}"
     );
     assert!(
-        text.contains("wall_rest min_left 0 must be positive"),
+        text.contains("wall_rest min_left 0 must lie in (0, 100]"),
         "{text}"
     );
     assert!(

@@ -878,6 +878,8 @@ pub(crate) fn test_tool(d: f64, rc: f64) -> thinplan_knowledge::Tool {
         holder_diameter: 40.0,
         holder_length: 50.0,
         max_slot_depth_ratio: 0.5,
+        neck_diameter: None,
+        reach: None,
     }
 }
 

@@ -3,6 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::at;
+use crate::check::{Checks, Range};
+
 /// The kinds of depressions and details the recogniser may report.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum DepressionKind {
@@ -76,6 +79,76 @@ fn default_priority() -> Vec<DepressionKind> {
 }
 
 impl DepressionRecognition {
+    /// Problems with the values (empty when fine).
+    pub fn problems(&self) -> Vec<String> {
+        let mut c = Checks::default();
+        self.checks(&mut c);
+        c.messages()
+    }
+
+    /// The problems, each at its place in `recognition_depressions.ron`.
+    pub fn checks(&self, c: &mut Checks) {
+        let fields: [(&'static str, f64, Range, &str); 8] = [
+            (
+                "distance_tolerance",
+                self.distance_tolerance,
+                Range::open(0.0, 1.0),
+                " mm",
+            ),
+            (
+                "angle_tolerance_deg",
+                self.angle_tolerance_deg,
+                Range::open(0.0, 10.0),
+                "°",
+            ),
+            (
+                "max_chamfer_width",
+                self.max_chamfer_width,
+                Range::above(0.0, 1000.0),
+                " mm",
+            ),
+            (
+                "max_chamfer_width_ratio",
+                self.max_chamfer_width_ratio,
+                Range::above(0.0, 10.0),
+                "",
+            ),
+            (
+                "max_fillet_radius",
+                self.max_fillet_radius,
+                Range::above(0.0, 10_000.0),
+                " mm",
+            ),
+            (
+                "min_chamfer_incline_deg",
+                self.min_chamfer_incline_deg,
+                Range::open(0.0, 45.0),
+                "°",
+            ),
+            (
+                "right_angle_tolerance_deg",
+                self.right_angle_tolerance_deg,
+                Range::open(0.0, 45.0),
+                "°",
+            ),
+            (
+                "min_slot_length_to_width",
+                self.min_slot_length_to_width,
+                Range::closed(1.0, 1000.0),
+                "",
+            ),
+        ];
+        for (name, v, r, unit) in fields {
+            c.range(at![name], "", name, v, r, unit);
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        for (i, k) in self.priority.iter().enumerate() {
+            if !seen.insert(*k) {
+                c.push(at!["priority", i], format!("priority lists {k:?} twice"));
+            }
+        }
+    }
+
     /// Whether `kind` is enabled.
     pub fn recognises(&self, kind: DepressionKind) -> bool {
         self.priority.contains(&kind)

@@ -2,6 +2,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::at;
+use crate::check::{Checks, Range};
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WallRecognition {
@@ -30,41 +33,78 @@ pub struct WallRecognition {
 impl WallRecognition {
     /// Problems with the values (empty when fine).
     pub fn validate(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        let pos = [
-            ("max_thickness", self.max_thickness),
-            ("min_height_to_thickness", self.min_height_to_thickness),
+        let mut c = Checks::default();
+        self.checks(&mut c);
+        c.messages()
+    }
+
+    /// The problems, each at its place in `recognition_walls.ron`.
+    pub fn checks(&self, c: &mut Checks) {
+        let ratio = Range::above(0.0, 1000.0);
+        let fields: [(&'static str, f64, Range, &str); 6] = [
+            (
+                "max_thickness",
+                self.max_thickness,
+                Range::above(0.0, 1000.0),
+                " mm",
+            ),
+            (
+                "min_height_to_thickness",
+                self.min_height_to_thickness,
+                ratio,
+                "",
+            ),
             (
                 "careful_height_to_thickness",
                 self.careful_height_to_thickness,
+                ratio,
+                "",
+            ),
+            (
+                "max_base_thickness",
+                self.max_base_thickness,
+                Range::closed(0.0, 10_000.0),
+                " mm (0: off)",
             ),
             (
                 "min_base_width_to_thickness",
                 self.min_base_width_to_thickness,
+                ratio,
+                "",
             ),
-            ("distance_tolerance", self.distance_tolerance),
-            ("angle_tolerance_deg", self.angle_tolerance_deg),
+            (
+                "angle_tolerance_deg",
+                self.angle_tolerance_deg,
+                Range::open(0.0, 10.0),
+                "°",
+            ),
         ];
-        for (name, v) in pos {
-            if !(v.is_finite() && v > 0.0) {
-                out.push(format!("{name} must be a positive number, is {v}"));
-            }
+        for (name, v, r, unit) in fields {
+            c.range(at![name], "", name, v, r, unit);
         }
-        if !(self.max_base_thickness.is_finite() && self.max_base_thickness >= 0.0) {
-            out.push(format!(
-                "max_base_thickness must be 0 or positive, is {}",
-                self.max_base_thickness
-            ));
-        }
+        // A tolerance at least as large as the walls it should tell apart
+        // would merge them.
+        let hi = if self.max_thickness.is_finite() && self.max_thickness > 0.0 {
+            self.max_thickness.min(1.0)
+        } else {
+            1.0
+        };
+        c.range(
+            at!["distance_tolerance"],
+            "",
+            "distance_tolerance",
+            self.distance_tolerance,
+            Range::open(0.0, hi),
+            " mm (below max_thickness)",
+        );
         if self.careful_height_to_thickness < self.min_height_to_thickness {
-            out.push("careful_height_to_thickness is below min_height_to_thickness".into());
+            c.push(
+                at!["careful_height_to_thickness"],
+                format!(
+                    "careful_height_to_thickness {} is below min_height_to_thickness {}",
+                    self.careful_height_to_thickness, self.min_height_to_thickness
+                ),
+            );
         }
-        if self.angle_tolerance_deg >= 10.0 {
-            out.push("angle_tolerance_deg must be below 10".into());
-        }
-        if self.distance_tolerance >= self.max_thickness {
-            out.push("distance_tolerance must be below max_thickness".into());
-        }
-        out
     }
 }
