@@ -12,10 +12,11 @@ use serde::Serialize;
 use thinplan_import::ImportError;
 use thinplan_knowledge::Knowledge;
 use thinplan_pipeline::{ErrorKind, PipelineError, Session};
-use thinplan_plan::{Setup, Stage};
+use thinplan_plan::{Setup, Stage, Verdict};
 
 mod pocket_cmd;
 mod post_cmd;
+mod report;
 mod simulate_cmd;
 
 /// Exit codes (documented in docs/CLI.md).
@@ -28,6 +29,10 @@ mod exit {
     pub const OUTPUT: u8 = 5;
     /// `simulate`: the stock does not match the part (gouge or missed material).
     pub const NOT_CLEAN: u8 = 6;
+    /// `plan`: the verification found the program unsafe; no program written.
+    pub const UNSAFE: u8 = 7;
+    /// `plan`: the program is safe but leaves material (written).
+    pub const INCOMPLETE: u8 = 8;
 }
 
 #[derive(Parser)]
@@ -120,6 +125,9 @@ enum Command {
         /// operations, its operation layers (figure 7.9) as DIR/SFn.layers.svg.
         #[arg(long, value_name = "DIR")]
         svg: Option<PathBuf>,
+        /// List every warning (default: grouped by kind with counts).
+        #[arg(long)]
+        verbose: bool,
     },
     /// Why the plan is as it is: the provenance of a stiffness feature (SFn),
     /// machining feature (MFn) or operation (OPn) with every constraint and
@@ -256,6 +264,7 @@ fn run(command: Command) -> Result<(), CliError> {
             sheet,
             until,
             svg,
+            verbose,
         } => plan(
             part,
             out,
@@ -267,6 +276,7 @@ fn run(command: Command) -> Result<(), CliError> {
                     .map(|g| (g, post.as_str(), tool_table.as_deref())),
                 sheet: sheet.as_deref(),
                 svg: svg.as_deref(),
+                verbose,
             },
             until.as_deref(),
         ),
@@ -569,6 +579,8 @@ struct Outputs<'a> {
     sheet: Option<&'a Path>,
     /// Directory for the per-wall pictures.
     svg: Option<&'a Path>,
+    /// Every warning, not grouped.
+    verbose: bool,
 }
 
 fn plan(
@@ -579,17 +591,22 @@ fn plan(
     outputs: Outputs<'_>,
     until: Option<&str>,
 ) -> Result<(), CliError> {
-    let Outputs { gcode, sheet, svg } = outputs;
+    let Outputs {
+        gcode,
+        sheet,
+        svg,
+        verbose,
+    } = outputs;
     let last = match until {
         None => thinplan_pipeline::LAST_BUILT,
         Some(name) => stage_named(name)?,
     };
-    if gcode.is_some() && last < Stage::Order {
+    if gcode.is_some() && last < Stage::Verify {
         return Err(CliError {
             code: exit::BAD_INPUT,
             kind: "input",
             message: format!(
-                "--gcode needs every stage; --until {} stops before the operation order",
+                "--gcode needs every stage; --until {} stops before the verification",
                 until.unwrap_or_default()
             ),
         });
@@ -635,14 +652,26 @@ fn plan(
         message: error_chain(&e),
     })?;
     let plan_file = out.display().to_string();
+    let verdict = plan.verification.as_ref().map(|v| v.verdict);
+    let mut program_written = None;
     if let Some((path, post, table)) = gcode {
-        post_cmd::write_program(&plan, &knowledge, post, path, table).map_err(|message| {
-            CliError {
-                code: exit::OUTPUT,
-                kind: "output",
-                message,
+        if verdict == Some(Verdict::Unsafe) || plan.operation_order.is_empty() {
+            // A stale program from an earlier run must not pass for this one.
+            for p in std::iter::once(path).chain(table) {
+                if p.is_file() {
+                    let _ = std::fs::remove_file(p);
+                }
             }
-        })?;
+        } else {
+            post_cmd::write_program(&plan, &knowledge, post, path, table).map_err(|message| {
+                CliError {
+                    code: exit::OUTPUT,
+                    kind: "output",
+                    message,
+                }
+            })?;
+            program_written = Some(path.display().to_string());
+        }
     }
     if let Some(path) = sheet {
         thinplan_sheet::write_sheet(path, &plan, &knowledge, &brep, &warnings).map_err(
@@ -662,49 +691,41 @@ fn plan(
         v["collisions"] = thinplan_collision::collisions_json(&thinplan_collision::check_holders(
             &plan, &knowledge, &brep,
         ));
+        v["program"] = serde_json::json!(program_written);
         if svg.is_some() {
             v["pictures"] = serde_json::json!(pictures);
         }
         println!("{v}");
     } else {
-        println!(
-            "planned {} ({} solid(s), {} faces, {:.1} mm3): stages {:?}",
-            source,
-            plan.part.summary.solids,
-            plan.part.summary.faces,
-            plan.part.summary.volume,
-            plan.stages_done
+        print!(
+            "{}",
+            report::summary(&source, &plan, &knowledge, &warnings, verbose)
         );
-        println!(
-            "  {} stiffness feature(s), {} connection(s), {} stiffness constraint(s)",
-            plan.stiffness_features.len(),
-            plan.connections.len(),
-            plan.stiffness_constraints.len()
-        );
-        println!(
-            "  {} machining feature(s), {} machining constraint(s), {} refusal(s)",
-            plan.machining_features.len(),
-            plan.machining_constraints.len(),
-            plan.refusals.len()
-        );
-        if let (Some(b), Some(f)) = (
-            plan.notes.get("resolve.blank_volume"),
-            plan.notes.get("resolve.features_volume"),
-        ) {
-            println!(
-                "  blank {b} mm3 = part {:.3} mm3 + machining features {f} mm3",
-                plan.part.summary.volume
-            );
-        }
-        for w in &warnings {
-            println!("warning: {w}");
-        }
         if let Some(dir) = svg {
             println!("{} picture(s) written to {}", pictures.len(), dir.display());
         }
         println!("plan written to {plan_file}");
+        match (&program_written, gcode) {
+            (Some(p), _) => println!("program written to {p}"),
+            (None, Some((p, _, _))) => println!("program NOT written to {}", p.display()),
+            _ => {}
+        }
     }
-    Ok(())
+    // The verdict is the exit code (docs/CLI.md): a driver in CI must not
+    // mistake an unsafe or incomplete plan for a finished one.
+    match verdict {
+        Some(Verdict::Unsafe) => Err(CliError {
+            code: exit::UNSAFE,
+            kind: "unsafe",
+            message: String::new(),
+        }),
+        Some(Verdict::Incomplete) => Err(CliError {
+            code: exit::INCOMPLETE,
+            kind: "incomplete",
+            message: String::new(),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// The stage `--until` names (`features`: machining features complete,
@@ -717,13 +738,14 @@ fn stage_named(name: &str) -> Result<Stage, CliError> {
         "features" | "resolve" => Stage::Resolve,
         "operations" => Stage::Operations,
         "order" => Stage::Order,
+        "verify" => Stage::Verify,
         _ => {
             return Err(CliError {
                 code: exit::BAD_INPUT,
                 kind: "input",
                 message: format!(
                     "--until {name}: not a stage; use recognise, sequence, determine, features, \
-                     operations or order"
+                     operations, order or verify"
                 ),
             })
         }

@@ -41,6 +41,25 @@ pub fn run(args: &PostArgs) -> Result<(), String> {
             .collect::<Vec<_>>()
             .join("\n")
     })?;
+    // The plan describes the part it was made from: a changed part file
+    // would get a program for another part.
+    let part = thinplan_import::import(&plan.part.source).map_err(|e| {
+        format!(
+            "{}: cannot read the plan's part {} to check it has not changed: {e}",
+            args.plan.display(),
+            plan.part.source
+        )
+    })?;
+    if part.part.sha256 != plan.part.sha256 {
+        return Err(format!(
+            "{}: the part {} changed since the plan was made (SHA-256 {} in the plan, {} now); \
+             plan it again",
+            args.plan.display(),
+            plan.part.source,
+            &plan.part.sha256[..plan.part.sha256.len().min(16)],
+            &part.part.sha256[..16]
+        ));
+    }
     let out = match &args.out {
         Some(o) => o.clone(),
         None => {

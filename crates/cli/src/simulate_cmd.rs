@@ -31,6 +31,10 @@ pub struct SimulateArgs {
     /// Tolerance for gouges and leftover, mm.
     #[arg(long, default_value_t = thinplan_stocksim::DEFAULT_TOL)]
     pub tol: f64,
+    /// Report feed moves going down into stock steeper than this (degrees
+    /// from horizontal) as plunges.
+    #[arg(long)]
+    pub max_descent_deg: Option<f64>,
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
@@ -73,6 +77,11 @@ pub fn run(args: &SimulateArgs) -> Result<bool, String> {
         cell: args.cell,
         tol: args.tol,
         blank,
+        checks: thinplan_stocksim::MoveChecks {
+            max_descent_deg: args.max_descent_deg,
+            tol: args.tol,
+            ..Default::default()
+        },
     };
     let sim = simulate(&part.brep, &program, &tools, &cfg).map_err(|e| e.to_string())?;
     if let Some(out) = &args.svg {

@@ -23,6 +23,7 @@ pub mod resources;
 pub mod sequencing;
 pub mod sizing;
 pub mod strategies;
+pub mod verification;
 
 pub use check::{Problem, Range, Seg};
 pub use interference::*;
@@ -34,6 +35,7 @@ pub use resources::*;
 pub use sequencing::*;
 pub use sizing::*;
 pub use strategies::*;
+pub use verification::*;
 
 /// All knowledge a plan uses, by id (ordered maps: deterministic).
 #[derive(Debug, Clone, PartialEq)]
@@ -60,10 +62,12 @@ pub struct Knowledge {
     pub interference: InterferenceKnowledge,
     /// Operation methods for the modular tool paths (`methods.ron`).
     pub methods: MethodKnowledge,
+    /// Stage 9's replay and verdict thresholds (`verification.ron`).
+    pub verification: VerificationKnowledge,
 }
 
 /// Files at the knowledge root; each is required.
-pub const ROOT_FILES: [&str; 7] = [
+pub const ROOT_FILES: [&str; 8] = [
     SIZING_FILE,
     "recognition_walls.ron",
     "recognition_depressions.ron",
@@ -71,6 +75,7 @@ pub const ROOT_FILES: [&str; 7] = [
     STRATEGIES_FILE,
     INTERFERENCE_FILE,
     METHODS_FILE,
+    VERIFICATION_FILE,
 ];
 
 /// The embedded copy of the repository's `knowledge/` directory:
@@ -124,6 +129,10 @@ const BUILTIN: &[(&str, &str)] = &[
     (
         "methods.ron",
         include_str!("../../../knowledge/methods.ron"),
+    ),
+    (
+        "verification.ron",
+        include_str!("../../../knowledge/verification.ron"),
     ),
 ];
 
@@ -284,6 +293,17 @@ impl Knowledge {
             InterferenceKnowledge::checks,
         );
         let methods = parse_root(&root, METHODS_FILE, origin, e, MethodKnowledge::checks);
+        let verification = parse_root(
+            &root,
+            VERIFICATION_FILE,
+            origin,
+            e,
+            |v: &VerificationKnowledge, c| {
+                for (field, reason) in v.problems() {
+                    c.push(vec![Seg::Field(field)], reason);
+                }
+            },
+        );
         let (
             Some(sizing),
             Some(wall_recognition),
@@ -292,6 +312,7 @@ impl Knowledge {
             Some(strategies),
             Some(interference),
             Some(methods),
+            Some(verification),
         ) = (
             sizing,
             walls,
@@ -300,6 +321,7 @@ impl Knowledge {
             strategies,
             interference,
             methods,
+            verification,
         )
         else {
             return Err(errors);
@@ -318,6 +340,7 @@ impl Knowledge {
                 strategies,
                 interference,
                 methods,
+                verification,
             }),
             errors,
             material_files: BTreeMap::new(),

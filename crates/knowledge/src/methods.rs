@@ -48,6 +48,11 @@ pub struct MethodKnowledge {
     /// How passes meet product faces that slope (absent: `Follow`).
     #[serde(default)]
     pub sloped_faces: SlopedFaces,
+    /// Through features (nothing below their open bottom but the blank's
+    /// underside): their bottom level goes this far (mm) below the blank,
+    /// plus the tool's corner radius, so the corner leaves no ring at the
+    /// foot of the opening.
+    pub breakthrough: f64,
     /// The methods, tried in order: the first whose `applies` matches a
     /// feature is used.
     pub methods: Vec<Method>,
@@ -361,6 +366,14 @@ impl MethodKnowledge {
     /// depths are fractions of the tool diameter D (≥ 0.2 mm, `tools/`): at
     /// least 0.01 · D keeps a 1 m feature under 5·10⁵ passes or levels.
     pub fn checks(&self, c: &mut Checks) {
+        c.range(
+            at!["breakthrough"],
+            "",
+            "breakthrough",
+            self.breakthrough,
+            Range::closed(0.0, 10.0),
+            " mm",
+        );
         c.range(
             at!["safe_clearance"],
             "",

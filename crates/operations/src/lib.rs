@@ -13,6 +13,7 @@
 //! times from `thinplan-feeds` under the machine's limits. [`order`] is
 //! stage 8.
 
+mod breakthrough;
 mod caps;
 mod coverage;
 mod free;
@@ -22,6 +23,7 @@ pub mod links;
 pub mod order;
 pub mod path;
 pub mod precedence;
+mod ramps;
 mod rest;
 
 use std::collections::BTreeMap;
@@ -122,8 +124,12 @@ pub fn operations(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsEr
 
 /// Stage 7 without the stage check (synthetic plans in tests and tools).
 pub fn operations_unchecked(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError> {
-    let mut out = first_pass(plan, k)?;
-    finish_orphan_stretches(plan, k, &mut out)?;
+    let (_, tools, _) = resources(plan, k)?;
+    let through = breakthrough::extended(plan, k, tools);
+    let p = through.as_ref().unwrap_or(plan);
+    let mut out = first_pass(p, k)?;
+    finish_orphan_stretches(p, k, &mut out)?;
+    breakthrough::record(plan, k, tools, &mut out.operations);
     Ok(out)
 }
 

@@ -31,7 +31,7 @@ use crate::{length_and_time, resources, Kind, OperationsError};
 
 /// Side of a height-map cell, mm. Any size is safe (cells err towards
 /// material); finer cells let links run lower beside walls.
-const CELL: f64 = 1.0;
+const CELL: f64 = 0.5;
 /// Most cells of a map: a larger part gets larger cells (4 M cells: 32 MB).
 const MAX_CELLS: f64 = 4.0e6;
 /// Arcs are followed by chords at most this long, mm; a chord strays at most
@@ -50,6 +50,8 @@ pub struct LinkReport {
     pub inside: usize,
     /// Links between operations of one tool that were lowered.
     pub between: usize,
+    /// Straight feed descents into stock turned into ramp entries.
+    pub ramped: usize,
     /// Operations the map could not follow (tool axis not the set-up's up,
     /// tool not in the set): their links stay, and the stock they cut is
     /// taken as still there.
@@ -179,6 +181,35 @@ impl HeightMap {
                 }
             }
         }
+    }
+
+    /// Stock above the lower surface of `tool` with its tip at `p` at
+    /// height `z`, mm³: what a straight descent to there removes, as the
+    /// map knows it (never less than the real stock's).
+    fn volume_under(&self, p: DVec2, z: f64, tool: &Tool) -> f64 {
+        let r = 0.5 * tool.diameter;
+        let rc = tool.corner_radius.clamp(0.0, r);
+        let (i0, i1, j0, j1) = self.cells(p, p, r);
+        let mut v = 0.0;
+        for j in j0..j1 {
+            for i in i0..i1 {
+                let rho = self.centre(i, j).distance(p);
+                if rho > r {
+                    continue;
+                }
+                let u = rho - (r - rc);
+                let lift = if u <= 0.0 {
+                    0.0
+                } else {
+                    rc - (rc * rc - u * u).max(0.0).sqrt()
+                };
+                let h = self.h[j * self.nx + i];
+                if h.is_finite() {
+                    v += (h - z - lift).max(0.0);
+                }
+            }
+        }
+        v * self.cell * self.cell
     }
 
     /// Highest stock in any cell that a disc of radius `rho` swept from `a`
@@ -393,6 +424,17 @@ pub fn lower_links(
         .collect();
     let mut changed = vec![false; plan.operations.len()];
     let mut prev: Option<usize> = None;
+    // Operations whose method is not in the knowledge (hand-made) ramp at
+    // the shallowest angle any method allows.
+    let min_entry_angle = mk
+        .methods
+        .iter()
+        .map(|m| m.entry.angle_deg())
+        .fold(f64::INFINITY, f64::min)
+        .min(45.0);
+    // A straight descent may take what the verification lets a plunge
+    // take; half of it, as this map is coarser than the replay.
+    let max_plunge = 0.5 * k.verification.max_plunge_mm3;
     for &oi in &order {
         let op = &plan.operations[oi];
         let (op_tool, op_start) = (op.tool.clone(), op.start);
@@ -459,10 +501,33 @@ pub fn lower_links(
             }
         }
         let op = &plan.operations[oi];
-        let (moves, inside) =
-            lower_inside(op, start, tool, &cyl, &mut map, &local, &view, clearance);
+        let entry_angle = mk
+            .methods
+            .iter()
+            .find(|m| m.id == op.method)
+            .map_or(min_entry_angle, |m| m.entry.angle_deg());
+        let mut ramps = 0;
+        let (moves, inside) = lower_inside(
+            op,
+            start,
+            tool,
+            &cyl,
+            &mut map,
+            &local,
+            &view,
+            clearance,
+            (entry_angle, max_plunge),
+            &mut ramps,
+        );
         report.inside += inside;
-        if inside > 0 || link_z.is_some() {
+        report.ramped += ramps;
+        if ramps > 0 {
+            plan.operations[oi]
+                .provenance
+                .values
+                .insert("entries_ramped".into(), ramps as f64);
+        }
+        if inside > 0 || link_z.is_some() || ramps > 0 {
             let op = &mut plan.operations[oi];
             op.start = start;
             op.moves = moves;
@@ -520,6 +585,8 @@ fn lower_inside(
     local: &Local,
     view: &View,
     clearance: f64,
+    entry: (f64, f64),
+    ramps: &mut usize,
 ) -> (Vec<PathMove>, usize) {
     let mv = &op.moves;
     let mut out: Vec<PathMove> = Vec::with_capacity(mv.len());
@@ -599,6 +666,23 @@ fn lower_inside(
             }
         }
         let m = &mv[i];
+        if let Some(ramp) = plunge_as_ramp(pos, m, mv.get(i + 1), map, tool, entry, view) {
+            for r in ramp {
+                if r.region != Region3::Rapid {
+                    map.cut(
+                        view.xy(pos),
+                        view.xy(r.to),
+                        view.z(pos).max(view.z(r.to)),
+                        tool,
+                    );
+                }
+                pos = r.to;
+                out.push(r);
+            }
+            *ramps += 1;
+            i += 1;
+            continue;
+        }
         if m.region != Region3::Rapid {
             let pts: Vec<DVec3> = if m.arc.is_none() {
                 vec![m.to]
@@ -620,6 +704,42 @@ fn lower_inside(
     }
     (out, lowered)
 }
+
+/// `m` as a ramp entry ([`crate::ramps`]) when it is a straight feed
+/// descent from `pos` and the map holds stock under the tool above its end.
+fn plunge_as_ramp(
+    pos: DVec3,
+    m: &PathMove,
+    next: Option<&PathMove>,
+    map: &HeightMap,
+    tool: &Tool,
+    (angle_deg, max_plunge_mm3): (f64, f64),
+    view: &View,
+) -> Option<Vec<PathMove>> {
+    if m.region == Region3::Rapid
+        || m.arc.is_some()
+        || !is_vertical(pos, m.to, view)
+        || view.z(m.to) >= view.z(pos) - 1e-9
+    {
+        return None;
+    }
+    if map.volume_under(view.xy(m.to), view.z(m.to), tool) <= max_plunge_mm3 {
+        return None;
+    }
+    let stock = map.highest(view.xy(m.to), view.xy(m.to), 0.5 * tool.diameter);
+    crate::ramps::ramp_entry(
+        pos,
+        m.to,
+        stock,
+        next?,
+        angle_deg,
+        RAMP_RUN_DIAMETERS * tool.diameter,
+        view,
+    )
+}
+
+/// Longest stretch of a ramp entry, in tool diameters.
+const RAMP_RUN_DIAMETERS: f64 = 4.0;
 
 #[cfg(test)]
 mod tests {

@@ -223,13 +223,14 @@ pub fn check_fits(
 }
 
 /// The stages a session runs after import and set-up, in order.
-pub const PLANNING_STAGES: [Stage; 6] = [
+pub const PLANNING_STAGES: [Stage; 7] = [
     Stage::Recognise,
     Stage::Sequence,
     Stage::Determine,
     Stage::Resolve,
     Stage::Operations,
     Stage::Order,
+    Stage::Verify,
 ];
 
 /// A part being planned: its geometry, the knowledge and the plan so far.
@@ -369,6 +370,12 @@ impl Session {
                 }
                 Ok(())
             }
+            Stage::Verify => {
+                needs(Stage::Order)?;
+                thinplan_verify::verify(&mut self.plan, &self.brep, &self.knowledge)
+                    .map_err(|e| PipelineError::new(ErrorKind::Stage, e.to_string()))?;
+                Ok(())
+            }
             Stage::Output => Err(PipelineError::new(
                 ErrorKind::Stage,
                 format!("{stage:?} is not built yet"),
@@ -402,7 +409,7 @@ impl Session {
 }
 
 /// The last stage this build can run.
-pub const LAST_BUILT: Stage = Stage::Order;
+pub const LAST_BUILT: Stage = Stage::Verify;
 
 /// An error with its sources, on one line.
 pub fn error_chain(e: &dyn std::error::Error) -> String {

@@ -37,6 +37,16 @@ pub fn write_program(
     out_path: &Path,
     tool_table_path: Option<&Path>,
 ) -> Result<NcProgram, String> {
+    if let Some(v) = plan.verification.as_ref() {
+        if v.verdict == thinplan_plan::Verdict::Unsafe {
+            return Err(format!(
+                "{}: not written: the plan's verification is unsafe ({} problem(s); `thinplan \
+                 explain` and the plan's `verification` say which operations)",
+                out_path.display(),
+                v.problems.len()
+            ));
+        }
+    }
     let post = post_of(knowledge, post_id)?;
     let tools = knowledge.tool_set(&plan.setup.tool_set).ok_or_else(|| {
         format!(

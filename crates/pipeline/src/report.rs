@@ -138,6 +138,8 @@ pub fn plan_json(plan: &Plan, brep: &Brep, plan_file: &str, warnings: &[String])
             })
         }).collect::<Vec<_>>(),
         "operation_order": plan.operation_order.iter().map(|id| id.to_string()).collect::<Vec<_>>(),
+        "verdict": plan.verification.as_ref().map(|v| v.verdict.name()),
+        "verification": plan.verification,
         "warnings": warnings,
     })
 }

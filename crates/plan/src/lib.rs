@@ -6,7 +6,9 @@
 pub mod io;
 pub mod model;
 pub mod order;
+pub mod verification;
 
 pub use io::{load, save, PlanIoError};
 pub use model::*;
 pub use order::topological_order;
+pub use verification::*;

@@ -67,6 +67,9 @@ pub struct Plan {
     pub refusals: Vec<Refusal>,
     /// Free-form metadata (knowledge version, tool versions …), ordered.
     pub notes: BTreeMap<String, String>,
+    /// Stage 9: the program replayed on the in-process stock, the verdict.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verification: Option<crate::verification::Verification>,
 }
 
 /// The pipeline stages, in order (DESIGN.md, "The pipeline").
@@ -82,11 +85,12 @@ pub enum Stage {
     Resolve,
     Operations,
     Order,
+    Verify,
     Output,
 }
 
 impl Stage {
-    pub const ALL: [Stage; 10] = [
+    pub const ALL: [Stage; 11] = [
         Stage::Import,
         Stage::Setup,
         Stage::Recognise,
@@ -96,6 +100,7 @@ impl Stage {
         Stage::Resolve,
         Stage::Operations,
         Stage::Order,
+        Stage::Verify,
         Stage::Output,
     ];
 }
@@ -541,6 +546,7 @@ impl Plan {
             operation_order: Vec::new(),
             refusals: Vec::new(),
             notes: BTreeMap::new(),
+            verification: None,
         }
     }
 
@@ -563,6 +569,18 @@ impl Plan {
         }
         if stage <= Stage::Operations {
             self.operations.clear();
+        }
+        if stage <= Stage::Verify {
+            // Operations the verification removed come back: they are
+            // judged again with the program they belong to.
+            if let Some(v) = self.verification.take() {
+                if stage == Stage::Verify {
+                    self.operation_order = v.planned_order;
+                    self.operations
+                        .extend(v.removed.into_iter().map(|r| r.removed));
+                    self.operations.sort_by_key(|o| o.id);
+                }
+            }
         }
         if stage <= Stage::Order {
             self.operation_order.clear();

@@ -51,6 +51,17 @@ pub struct NcProgram {
     pub unmeasured_moves: usize,
     /// Number of tool changes written.
     pub tool_changes: usize,
+    /// The first line (1-based) of every operation's blocks, in program
+    /// order: a checker's line numbers map back to operations by it.
+    pub operation_lines: Vec<(usize, OperationId)>,
+}
+
+impl NcProgram {
+    /// The operation whose blocks hold `line` (1-based), if any.
+    pub fn operation_at(&self, line: usize) -> Option<OperationId> {
+        let k = self.operation_lines.partition_point(|(l, _)| *l <= line);
+        (k > 0).then(|| self.operation_lines[k - 1].1)
+    }
 }
 
 /// Why a plan cannot be posted. Each names the operation (and move) at fault.
@@ -125,6 +136,7 @@ pub fn post(plan: &Plan, post: &PostProcessor, tools: &ToolSet) -> Result<NcProg
     let mut current_tool: Option<&str> = None;
     let mut coolant_on = false;
     let mut last_end: Option<DVec3> = None;
+    let mut op_starts = Vec::with_capacity(ops.len());
     for op in &ops {
         let number = tool_number(op, tools)?;
         let tool = &tools.tools[number - 1];
@@ -152,6 +164,7 @@ pub fn post(plan: &Plan, post: &PostProcessor, tools: &ToolSet) -> Result<NcProg
             w.tool_changes += 1;
             current_tool = Some(op.tool.as_str());
         }
+        op_starts.push((w.out.len(), op.id));
         w.blocks(&post.operation_start, &op_vars)?;
         w.blocks(&post.spindle_on, &op_vars)?;
         if !coolant_on {
@@ -192,6 +205,7 @@ pub fn post(plan: &Plan, post: &PostProcessor, tools: &ToolSet) -> Result<NcProg
     }
     w.blocks(&post.program_end, &vars)?;
     let line_count = w.out.lines().count();
+    let operation_lines = lines_of_offsets(&w.out, &op_starts);
     Ok(NcProgram {
         text: w.out,
         tool_table: tool_table(tools, post.decimals),
@@ -202,7 +216,23 @@ pub fn post(plan: &Plan, post: &PostProcessor, tools: &ToolSet) -> Result<NcProg
         line_count,
         unmeasured_moves: w.unmeasured,
         tool_changes: w.tool_changes,
+        operation_lines,
     })
+}
+
+/// 1-based line numbers of byte offsets (ascending) into `text`.
+fn lines_of_offsets(text: &str, starts: &[(usize, OperationId)]) -> Vec<(usize, OperationId)> {
+    let bytes = text.as_bytes();
+    let mut line = 1;
+    let mut at = 0;
+    starts
+        .iter()
+        .map(|&(offset, id)| {
+            line += bytes[at..offset].iter().filter(|&&b| b == b'\n').count();
+            at = offset;
+            (line, id)
+        })
+        .collect()
 }
 
 /// The LinuxCNC tool table for a tool set: tool `n` (1-based position in the
@@ -312,8 +342,13 @@ fn ordered_operations(plan: &Plan) -> Result<Vec<&Operation>, PostError> {
     }
     let by_id: BTreeMap<OperationId, &Operation> =
         plan.operations.iter().map(|o| (o.id, o)).collect();
-    if plan.operation_order.is_empty() {
+    // An order that stage 8 (or the verification, removing every
+    // operation) left empty means nothing to cut, not "any order".
+    if plan.operation_order.is_empty() && !plan.stages_done.contains(&thinplan_plan::Stage::Order) {
         return Ok(by_id.into_values().collect());
+    }
+    if plan.operation_order.is_empty() {
+        return Err(PostError::NoOperations);
     }
     let mut seen = std::collections::BTreeSet::new();
     let ops = plan

@@ -23,7 +23,7 @@ use thinplan_brep::Brep;
 pub use compare::{CellClass, Region};
 pub use gcode::{parse, parse_bytes, GcodeError, Move, MoveKind, Program};
 pub use tools::{parse_tool_table, ToolKind, ToolLibrary, ToolShape};
-pub use zmap::{Blank, Crash, CrashKind, Grid, ReplayStats, SimError, ZMap};
+pub use zmap::{Blank, Crash, CrashKind, Grid, MoveChecks, ReplayStats, SimError, ZMap};
 
 /// Default cell size, mm.
 pub const DEFAULT_CELL: f64 = 0.2;
@@ -41,6 +41,8 @@ pub struct SimConfig {
     pub tol: f64,
     /// The blank; `None` = the part's bounding box.
     pub blank: Option<Blank>,
+    /// Plunges and shank contact to report as crashes (none by default).
+    pub checks: MoveChecks,
 }
 
 impl Default for SimConfig {
@@ -49,6 +51,7 @@ impl Default for SimConfig {
             cell: DEFAULT_CELL,
             tol: DEFAULT_TOL,
             blank: None,
+            checks: MoveChecks::default(),
         }
     }
 }
@@ -194,7 +197,7 @@ pub fn simulate(
     };
     let mut stock = ZMap::new(blank, cfg.cell)?;
     let t0 = Instant::now();
-    let rs = stock.replay(program, tools)?;
+    let rs = stock.replay_checked(program, tools, &cfg.checks)?;
     let replay_time = t0.elapsed();
     warnings.extend(rs.warnings.iter().cloned());
 
@@ -207,11 +210,25 @@ pub fn simulate(
     let ideal = if rs.tools_used.is_empty() {
         part_top.clone()
     } else {
+        // Where no part stands the tool may go below the blank (a through
+        // opening is cut free, not down to its underside only): such
+        // columns sit lower by the largest corner radius, and the ideal is
+        // then held at the blank's underside, where the stock ends.
+        let free = rs
+            .tools_used
+            .iter()
+            .map(|t| tools[t].corner_radius)
+            .fold(0.0, f64::max) as f32
+            + 2.0 * cfg.cell as f32;
+        let open: Vec<f32> = part_top
+            .iter()
+            .map(|&p| if p <= floor { floor - free } else { p })
+            .collect();
         let mut best = vec![f32::INFINITY; grid.len()];
         for t in &rs.tools_used {
-            let f = compare::ideal_field(&part_top, &grid, &tools[t], floor);
+            let f = compare::ideal_field(&open, &grid, &tools[t], floor);
             for (b, v) in best.iter_mut().zip(f) {
-                *b = b.min(v);
+                *b = b.min(v.max(floor));
             }
         }
         best

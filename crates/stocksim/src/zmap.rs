@@ -21,6 +21,8 @@
 //! The only discretisation is the grid itself: the stock is known at cell
 //! centres, and volumes are sums of cell columns.
 
+use std::collections::BTreeMap;
+
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
@@ -196,6 +198,58 @@ pub enum CrashKind {
     RapidIntoStock,
     /// A feed move that removes material with the spindle stopped.
     SpindleOff,
+    /// A feed move going down into material steeper than the entry limit
+    /// ([`MoveChecks::max_descent_deg`]): an axial plunge, not a ramp or helix.
+    PlungeIntoStock,
+    /// A feed move that cuts a column of material taller than the tool's
+    /// flute length ([`MoveChecks::flute_length`]): the shank cuts.
+    ShankContact,
+}
+
+/// Checks of the moves themselves, beside the stock they leave. The default
+/// checks nothing beyond rapids and a stopped spindle.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MoveChecks {
+    /// Flute length per tool number, mm: a column cut deeper than this in
+    /// one move had material above the flutes (the tip is at or below the
+    /// column's new height, so this never over-reports).
+    pub flute_length: BTreeMap<u32, f64>,
+    /// Steepest descent into material a feed move may make, degrees from
+    /// horizontal; `None` checks no descent.
+    pub max_descent_deg: Option<f64>,
+    /// A steeper descent removing no more than this (mm³) is a graze, not
+    /// a plunge.
+    pub max_plunge_mm3: f64,
+    /// Cuts shallower than this (mm) are not counted as plunges or shank
+    /// contact: the comparison tolerance.
+    pub tol: f64,
+}
+
+impl MoveChecks {
+    fn plunges(&self, m: &Move, start: DVec3, st: &CutStats) -> bool {
+        let Some(limit) = self.max_descent_deg else {
+            return false;
+        };
+        let drop = start.z - m.end.z;
+        if drop <= 1e-9
+            || st.max_depth <= self.tol.max(REMOVAL_EPS)
+            || st.volume <= self.max_plunge_mm3
+        {
+            return false;
+        }
+        // Arcs descend along their length; lines along their plan length.
+        let run = match m.kind {
+            MoveKind::Arc { .. } => (m.length().powi(2) - drop * drop).max(0.0).sqrt(),
+            _ => (m.end.truncate() - start.truncate()).length(),
+        };
+        drop.atan2(run).to_degrees() > limit + 1e-6
+    }
+
+    fn shank(&self, tool: u32, st: &CutStats) -> bool {
+        self.flute_length
+            .get(&tool)
+            .is_some_and(|&l| st.max_depth > l + self.tol)
+    }
 }
 
 /// A move that cut where it must not.
@@ -486,6 +540,17 @@ impl ZMap {
         program: &Program,
         tools: &ToolLibrary,
     ) -> Result<ReplayStats, SimError> {
+        self.replay_checked(program, tools, &MoveChecks::default())
+    }
+
+    /// Replays a whole program and reports, beside rapids into stock and a
+    /// stopped spindle, the moves `checks` forbids.
+    pub fn replay_checked(
+        &mut self,
+        program: &Program,
+        tools: &ToolLibrary,
+        checks: &MoveChecks,
+    ) -> Result<ReplayStats, SimError> {
         let mut out = ReplayStats::default();
         let mut used = std::collections::BTreeSet::new();
         let mut warned_no_tool = false;
@@ -552,6 +617,10 @@ impl ZMap {
                 Some(CrashKind::RapidIntoStock)
             } else if m.spindle == Spindle::Off {
                 Some(CrashKind::SpindleOff)
+            } else if checks.plunges(m, start, &st) {
+                Some(CrashKind::PlungeIntoStock)
+            } else if checks.shank(t, &st) {
+                Some(CrashKind::ShankContact)
             } else {
                 None
             };

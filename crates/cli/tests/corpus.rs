@@ -1,0 +1,300 @@
+//! The generated corpus (thin-walled parts written as STEP by OpenCASCADE,
+//! `tools/corpus/generate.py`) and the bundled samples, planned end to end
+//! and judged by the independent checker in `../shared/tools` (its own STEP
+//! reader, G-code reader and tool shapes; no code shared with thinplan):
+//!
+//! - `plan` never fails with an internal or input error on a valid part;
+//! - a program is written exactly when the verdict is not `unsafe`;
+//! - every written program is safe by the checker: no gouge, no rapid
+//!   through stock, no shank contact, no holder collision, no straight
+//!   plunge into solid stock;
+//! - a `safe` verdict leaves no more missed material than the verification
+//!   allows, by the checker's count too.
+//!
+//! The corpus is `$THINPLAN_CORPUS` (`.ci/run` generates it), else it is
+//! generated here into the target directory; the checker is
+//! `$THINPLAN_SHARED/tools`, else `../shared/tools` beside the repository,
+//! else `/work/shared/tools`. A missing peer is a failure, never a skip.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .canonicalize()
+        .unwrap()
+}
+
+fn shared() -> PathBuf {
+    if let Ok(s) = std::env::var("THINPLAN_SHARED") {
+        return PathBuf::from(s);
+    }
+    let beside = repo().join("../shared");
+    if beside.join("tools/check_gcode_stock.py").is_file() {
+        return beside;
+    }
+    PathBuf::from("/work/shared")
+}
+
+fn sh(cmd: &mut Command, what: &str) -> String {
+    let out = cmd
+        .output()
+        .unwrap_or_else(|e| panic!("{what}: cannot run: {e}"));
+    assert!(
+        out.status.success(),
+        "{what} failed ({}):\n{}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// The checkers' Python (OpenCASCADE, numpy, numba), made if missing.
+fn python() -> PathBuf {
+    let setup = shared().join("tools/setup.sh");
+    assert!(
+        setup.is_file(),
+        "the independent checker is missing: {} (set THINPLAN_SHARED)",
+        setup.display()
+    );
+    let py = sh(Command::new("bash").arg(&setup), "checker setup");
+    PathBuf::from(py.lines().last().unwrap_or_default())
+}
+
+fn corpus(py: &Path) -> PathBuf {
+    if let Ok(d) = std::env::var("THINPLAN_CORPUS") {
+        let d = PathBuf::from(d);
+        assert!(
+            d.join("index.json").is_file(),
+            "THINPLAN_CORPUS={} has no index.json (run tools/corpus/generate.py)",
+            d.display()
+        );
+        return d;
+    }
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("corpus");
+    if !d.join("index.json").is_file() {
+        sh(
+            Command::new(py)
+                .arg(repo().join("tools/corpus/generate.py"))
+                .arg(&d),
+            "corpus generator",
+        );
+    }
+    d
+}
+
+struct Planned {
+    name: String,
+    code: i32,
+    verdict: Option<String>,
+    program: bool,
+    report: Value,
+}
+
+fn plan(part: &str, name: &str, out: &Path) -> Planned {
+    let ngc = out.join(format!("{name}.ngc"));
+    let o = Command::new(env!("CARGO_BIN_EXE_thinplan"))
+        .args(["plan", part, "--json", "--out"])
+        .arg(out.join(format!("{name}.plan.json")))
+        .arg("--gcode")
+        .arg(&ngc)
+        .arg("--tool-table")
+        .arg(out.join(format!("{name}.tbl")))
+        .output()
+        .unwrap();
+    let code = o.status.code().unwrap_or(-1);
+    let report: Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+        panic!(
+            "{name}: plan printed no JSON ({e}), exit {code}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    Planned {
+        name: name.to_string(),
+        code,
+        verdict: report["verdict"].as_str().map(str::to_string),
+        program: ngc.is_file(),
+        report,
+    }
+}
+
+/// Runs the checker over every `NAME.ngc` in `programs` against
+/// `parts/NAME.step`; its per-part JSON by name.
+fn check(
+    py: &Path,
+    programs: &Path,
+    parts: &Path,
+    tool_lib: &Path,
+) -> serde_json::Map<String, Value> {
+    let json = programs.join("checker.json");
+    let o = Command::new(py)
+        .arg(shared().join("tools/check_gcode_stock.py"))
+        .arg(programs)
+        .arg(parts)
+        .arg("--tool-lib")
+        .arg(tool_lib)
+        .args(["--max-missed", "1", "--max-shank", "0", "--max-holder", "0"])
+        .args(["--max-plunge-mm3", "0.5", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    // Exit 1 only says some part failed a threshold; the JSON says which.
+    let text = std::fs::read_to_string(&json).unwrap_or_else(|e| {
+        panic!(
+            "checker wrote no JSON ({e}): {}\n{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    let v: Value = serde_json::from_str(&text).unwrap();
+    match v.get("parts") {
+        Some(Value::Object(m)) => m.clone(),
+        _ => panic!("unexpected checker JSON: {text}"),
+    }
+}
+
+/// What the checker holds against one program beside missed material
+/// (empty: safe by the checker).
+fn unsafe_by_checker(r: &Value) -> Vec<String> {
+    if let Some(e) = r.get("error") {
+        return vec![format!("checker error {e}")];
+    }
+    let mut out = Vec::new();
+    for bad in r["verdict"].as_array().into_iter().flatten() {
+        let bad = bad.as_str().unwrap_or_default();
+        if bad == "missed" {
+            continue;
+        }
+        let detail = match bad {
+            "gouge" => &r["gouge"]["worst"],
+            "rapid through stock" => &r["rapid_through_stock"]["worst"],
+            "shank contact" => &r["shank_contact"]["worst"],
+            "holder collision" => &r["holder_collision"]["worst"],
+            "straight plunge into solid stock" => &r["plunges_into_stock"]["largest"][0],
+            _ => &Value::Null,
+        };
+        out.push(format!("{bad} {detail}"));
+    }
+    out
+}
+
+fn judge(planned: &[Planned], checked: &serde_json::Map<String, Value>) -> Vec<String> {
+    let mut failures = Vec::new();
+    for p in planned {
+        let tag = format!("{} (exit {}, verdict {:?})", p.name, p.code, p.verdict);
+        if ![0, 7, 8].contains(&p.code) {
+            failures.push(format!("{tag}: plan failed: {}", p.report["error"]));
+            continue;
+        }
+        let expected_code = match p.verdict.as_deref() {
+            Some("safe") => 0,
+            Some("unsafe") => 7,
+            Some("incomplete") => 8,
+            _ => -1,
+        };
+        if p.code != expected_code {
+            failures.push(format!("{tag}: exit code does not match the verdict"));
+        }
+        let wrote = p.program;
+        if wrote == (p.verdict.as_deref() == Some("unsafe")) {
+            failures.push(format!("{tag}: program written {wrote}"));
+        }
+        if !wrote {
+            continue;
+        }
+        let Some(r) = checked.get(&p.name) else {
+            failures.push(format!("{tag}: the checker has no result"));
+            continue;
+        };
+        let bad = unsafe_by_checker(r);
+        if !bad.is_empty() {
+            failures.push(format!("{tag}: unsafe by the checker: {}", bad.join("; ")));
+        }
+        let missed = r
+            .pointer("/missed/volume")
+            .and_then(Value::as_f64)
+            .unwrap_or(0.0);
+        if p.verdict.as_deref() == Some("safe") && missed > 1.0 {
+            failures.push(format!(
+                "{tag}: safe, but the checker finds {missed:.2} mm3 missed"
+            ));
+        }
+    }
+    failures
+}
+
+fn summary(planned: &[Planned]) -> String {
+    let count = |v: &str| {
+        planned
+            .iter()
+            .filter(|p| p.verdict.as_deref() == Some(v))
+            .count()
+    };
+    format!(
+        "{} parts: {} safe, {} incomplete, {} unsafe",
+        planned.len(),
+        count("safe"),
+        count("incomplete"),
+        count("unsafe")
+    )
+}
+
+#[test]
+fn corpus_programs_are_safe_or_not_written() {
+    let py = python();
+    let corpus = corpus(&py);
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("corpus-plans");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    let mut names: Vec<String> = std::fs::read_dir(&corpus)
+        .unwrap()
+        .filter_map(|e| {
+            let p = e.ok()?.path();
+            let stem = p.file_stem()?.to_string_lossy().into_owned();
+            (p.extension()? == "step").then_some(stem)
+        })
+        .collect();
+    names.sort();
+    assert!(
+        names.len() >= 40,
+        "the corpus holds {} parts, fewer than 40",
+        names.len()
+    );
+    let planned: Vec<Planned> = names
+        .iter()
+        .map(|n| plan(&corpus.join(format!("{n}.step")).to_string_lossy(), n, &out))
+        .collect();
+    let lib = repo().join("knowledge/tools/endmills_12_20.ron");
+    let checked = check(&py, &out, &corpus, &lib);
+    let failures = judge(&planned, &checked);
+    eprintln!("corpus: {}", summary(&planned));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn bundled_samples_are_safe_or_not_written() {
+    let py = python();
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-plans");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    let mut planned = Vec::new();
+    for (n, _) in thinplan_import::SAMPLES {
+        let step = out.join(format!("{n}.step"));
+        sh(
+            Command::new(env!("CARGO_BIN_EXE_thinplan"))
+                .args(["export-step", &format!("builtin:{n}")])
+                .arg(&step),
+            "export-step",
+        );
+        planned.push(plan(&format!("builtin:{n}"), n, &out));
+    }
+    let lib = repo().join("knowledge/tools/endmills_12_20.ron");
+    let checked = check(&py, &out, &out, &lib);
+    let failures = judge(&planned, &checked);
+    eprintln!("samples: {}", summary(&planned));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

@@ -1,0 +1,55 @@
+//! Stage 9's thresholds (`verification.ron`): how finely the program is
+//! replayed and what makes a plan incomplete or unsafe.
+
+use serde::{Deserialize, Serialize};
+
+/// The name of the verification file at the knowledge root.
+pub const VERIFICATION_FILE: &str = "verification.ron";
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VerificationKnowledge {
+    /// Z-map cell size, mm.
+    pub cell: f64,
+    /// Gouge and cut tolerance, mm.
+    pub tolerance: f64,
+    /// Missed material above which a plan is incomplete, mm³.
+    pub max_missed_mm3: f64,
+    /// Material no tool of the program reaches above which a plan is
+    /// incomplete, mm³.
+    pub max_unreachable_mm3: f64,
+    /// Steepest descent into material a feed move may make, degrees.
+    pub max_descent_deg: f64,
+    /// Most material one steeper descent may remove before it counts as a
+    /// plunge into solid stock (the tool's rim grazing a cut's edge), mm³.
+    pub max_plunge_mm3: f64,
+    /// Replays at most (each after removing failing operations).
+    pub max_rounds: u32,
+    /// Post-processor id whose program is replayed.
+    pub post: String,
+}
+
+impl VerificationKnowledge {
+    /// Values out of range, as `(field, reason)`: each bounds the replay's
+    /// work or keeps a verdict meaningful.
+    pub fn problems(&self) -> Vec<(&'static str, String)> {
+        let mut out = Vec::new();
+        let mut range = |name: &'static str, v: f64, lo: f64, hi: f64| {
+            if !(v.is_finite() && v >= lo && v <= hi) {
+                out.push((
+                    name,
+                    format!("`{name}` is {v}; it must lie in [{lo}, {hi}]"),
+                ));
+            }
+        };
+        // Below 0.02 mm a 1 m part needs 2.5e9 cells.
+        range("cell", self.cell, 0.02, 5.0);
+        range("tolerance", self.tolerance, 0.001, 1.0);
+        range("max_missed_mm3", self.max_missed_mm3, 0.0, 1e12);
+        range("max_unreachable_mm3", self.max_unreachable_mm3, 0.0, 1e12);
+        range("max_descent_deg", self.max_descent_deg, 1.0, 90.0);
+        range("max_plunge_mm3", self.max_plunge_mm3, 0.0, 1e6);
+        range("max_rounds", self.max_rounds as f64, 1.0, 20.0);
+        out
+    }
+}

@@ -1,0 +1,76 @@
+//! The move checks of the verification stage: straight plunges into solid
+//! stock and cuts deeper than the flutes are crashes; ramps within the
+//! entry limit, descents in air and cuts within the flutes are not.
+
+use glam::DVec3;
+use thinplan_stocksim::{parse, parse_tool_table, Blank, CrashKind, MoveChecks, ZMap};
+
+/// A 40 × 40 × 30 block, cells of 0.5 mm.
+fn block() -> ZMap {
+    ZMap::new(
+        Blank {
+            min: DVec3::ZERO,
+            max: DVec3::new(40.0, 40.0, 30.0),
+        },
+        0.5,
+    )
+    .unwrap()
+}
+
+fn checks(flute: f64) -> MoveChecks {
+    MoveChecks {
+        flute_length: [(1, flute)].into_iter().collect(),
+        max_descent_deg: Some(45.0),
+        max_plunge_mm3: 0.5,
+        tol: 0.05,
+    }
+}
+
+fn crashes(body: &str, c: &MoveChecks) -> Vec<CrashKind> {
+    let text = format!("G21 G90 G17\nT1 M6\nS10000 M3\n{body}\nM5\nM30\n");
+    let prog = parse(&text, "t.ngc").unwrap();
+    let tools = parse_tool_table("T1 P1 D10 ;em10 r0.5\n", "t.tbl").unwrap();
+    let mut z = block();
+    let rs = z.replay_checked(&prog, &tools, c).unwrap();
+    rs.crashes.iter().map(|c| c.kind).collect()
+}
+
+#[test]
+fn straight_plunge_into_solid_stock_is_a_crash() {
+    let k = crashes("G0 X20 Y20 Z40\nG1 Z25 F500", &checks(30.0));
+    assert_eq!(k, vec![CrashKind::PlungeIntoStock]);
+}
+
+#[test]
+fn plunge_in_air_is_not_a_crash() {
+    let k = crashes("G0 X20 Y20 Z40\nG1 Z31 F500", &checks(30.0));
+    assert!(k.is_empty(), "{k:?}");
+}
+
+#[test]
+fn ramp_within_the_limit_is_not_a_crash() {
+    // 1 mm down over 20 mm: about 3°.
+    let k = crashes("G0 X5 Y20 Z40\nG1 Z30 F500\nG1 X25 Z29", &checks(30.0));
+    assert!(k.is_empty(), "{k:?}");
+}
+
+#[test]
+fn ramp_steeper_than_the_limit_is_a_plunge() {
+    // 5 mm down over 2 mm of travel: 68°.
+    let k = crashes("G0 X5 Y20 Z40\nG1 Z30 F500\nG1 X7 Z25", &checks(30.0));
+    assert_eq!(k, vec![CrashKind::PlungeIntoStock]);
+}
+
+#[test]
+fn a_cut_deeper_than_the_flutes_is_shank_contact() {
+    // Into the block's side 8 mm deep, flutes 5 mm: the shank cuts.
+    let body = "G0 X-10 Y20 Z40\nG0 Z22\nG1 X30 F500";
+    assert_eq!(crashes(body, &checks(5.0)), vec![CrashKind::ShankContact]);
+    assert!(crashes(body, &checks(12.0)).is_empty());
+}
+
+#[test]
+fn default_checks_report_no_plunge() {
+    let k = crashes("G0 X20 Y20 Z40\nG1 Z25 F500", &MoveChecks::default());
+    assert!(k.is_empty(), "{k:?}");
+}
