@@ -95,9 +95,12 @@ mod tests {
 
     fn plan_with_one_operation() -> Plan {
         let part = PartRef {
-            source: "builtin:test".into(),
+            source: "builtin:tall_rib".into(),
             format: PartFormat::Native,
-            sha256: "ab".repeat(32),
+            sha256: thinplan_import::import("builtin:tall_rib")
+                .unwrap()
+                .part
+                .sha256,
             declared_units: "mm".into(),
             summary: PartSummary {
                 solids: 1,
@@ -162,6 +165,54 @@ mod tests {
             e.contains("unknown post `heidenhain`") && e.contains("fanuc, linuxcnc"),
             "{e}"
         );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A plan whose part changed, or whose verification found the program
+    /// unsafe, gets no program.
+    #[test]
+    fn a_changed_part_or_an_unsafe_verdict_is_refused() {
+        let dir = std::env::temp_dir().join(format!("thinplan-post-refuse-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let plan_path = dir.join("part.plan.json");
+        let out = dir.join("part.ngc");
+        let args = PostArgs {
+            plan: plan_path.clone(),
+            post: "linuxcnc".into(),
+            out: Some(out.clone()),
+            tool_table: None,
+            knowledge: None,
+        };
+        let mut changed = plan_with_one_operation();
+        changed.part.sha256 = "ab".repeat(32);
+        thinplan_plan::save(&changed, &plan_path).unwrap();
+        let e = run(&args).unwrap_err();
+        assert!(e.contains("changed since the plan was made"), "{e}");
+        assert!(!out.exists());
+
+        let mut unsafe_plan = plan_with_one_operation();
+        unsafe_plan.verification = Some(Verification {
+            verdict: Verdict::Unsafe,
+            problems: vec![Problem {
+                kind: ProblemKind::Gouge,
+                operation: Some(OperationId(1)),
+                line: Some(12),
+                at: [0.0; 3],
+                depth_mm: 1.0,
+                volume_mm3: 3.0,
+            }],
+            left: Vec::new(),
+            removed: Vec::new(),
+            planned_order: Vec::new(),
+            rounds: 1,
+            cell_mm: 0.25,
+            tolerance_mm: 0.05,
+            provenance: Provenance::new(ProvenanceSource::Knowledge, "verification"),
+        });
+        thinplan_plan::save(&unsafe_plan, &plan_path).unwrap();
+        let e = run(&args).unwrap_err();
+        assert!(e.contains("unsafe"), "{e}");
+        assert!(!out.exists());
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

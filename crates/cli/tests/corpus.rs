@@ -12,7 +12,8 @@
 //!   allows, by the checker's count too.
 //!
 //! The corpus is `$THINPLAN_CORPUS` (`.ci/run` generates it), else it is
-//! generated here into the target directory; the checker is
+//! generated here into the target directory; CI plans the two smallest
+//! parts of each family, `THINPLAN_CORPUS_ALL=1` every part; the checker is
 //! `$THINPLAN_SHARED/tools`, else `../shared/tools` beside the repository,
 //! else `/work/shared/tools`. A missing peer is a failure, never a skip.
 
@@ -243,6 +244,72 @@ fn summary(planned: &[Planned]) -> String {
     )
 }
 
+/// The parts CI plans: every part with `THINPLAN_CORPUS_ALL=1`, else the
+/// two smallest blanks of each family (the rule is about size only, so that
+/// the run fits CI's time; the whole corpus is measured in
+/// `docs/BENCHMARKS.md`).
+fn selection(corpus: &Path) -> Vec<String> {
+    let index: Value =
+        serde_json::from_str(&std::fs::read_to_string(corpus.join("index.json")).unwrap()).unwrap();
+    let parts = index["parts"].as_array().expect("index.json lists parts");
+    assert!(
+        parts.len() >= 40,
+        "the corpus holds {} parts, fewer than 40",
+        parts.len()
+    );
+    let all = std::env::var("THINPLAN_CORPUS_ALL").is_ok_and(|v| v == "1");
+    let mut by_family: std::collections::BTreeMap<String, Vec<(f64, String)>> = Default::default();
+    for p in parts {
+        let b: Vec<f64> = p["bbox"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let volume = (b[3] - b[0]) * (b[4] - b[1]) * (b[5] - b[2]);
+        let family = p["name"]
+            .as_str()
+            .unwrap()
+            .rsplit_once('_')
+            .unwrap()
+            .0
+            .to_string();
+        by_family
+            .entry(family)
+            .or_default()
+            .push((volume, p["name"].as_str().unwrap().to_string()));
+    }
+    let mut names = Vec::new();
+    for (_, mut list) in by_family {
+        list.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let n = if all { list.len() } else { 2 };
+        names.extend(list.into_iter().take(n).map(|(_, n)| n));
+    }
+    names.sort();
+    names
+}
+
+/// Plans `jobs` (part, name) on two threads (the machine's cores).
+fn plan_all(jobs: &[(String, String)], out: &Path) -> Vec<Planned> {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let done = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..2 {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some((part, name)) = jobs.get(i) else {
+                    break;
+                };
+                let p = plan(part, name, out);
+                done.lock().unwrap().push((i, p));
+            });
+        }
+    });
+    let mut v = done.into_inner().unwrap();
+    v.sort_by_key(|(i, _)| *i);
+    v.into_iter().map(|(_, p)| p).collect()
+}
+
 #[test]
 fn corpus_programs_are_safe_or_not_written() {
     let py = python();
@@ -250,24 +317,19 @@ fn corpus_programs_are_safe_or_not_written() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("corpus-plans");
     let _ = std::fs::remove_dir_all(&out);
     std::fs::create_dir_all(&out).unwrap();
-    let mut names: Vec<String> = std::fs::read_dir(&corpus)
-        .unwrap()
-        .filter_map(|e| {
-            let p = e.ok()?.path();
-            let stem = p.file_stem()?.to_string_lossy().into_owned();
-            (p.extension()? == "step").then_some(stem)
+    let jobs: Vec<(String, String)> = selection(&corpus)
+        .into_iter()
+        .map(|n| {
+            (
+                corpus
+                    .join(format!("{n}.step"))
+                    .to_string_lossy()
+                    .into_owned(),
+                n,
+            )
         })
         .collect();
-    names.sort();
-    assert!(
-        names.len() >= 40,
-        "the corpus holds {} parts, fewer than 40",
-        names.len()
-    );
-    let planned: Vec<Planned> = names
-        .iter()
-        .map(|n| plan(&corpus.join(format!("{n}.step")).to_string_lossy(), n, &out))
-        .collect();
+    let planned = plan_all(&jobs, &out);
     let lib = repo().join("knowledge/tools/endmills_12_20.ron");
     let checked = check(&py, &out, &corpus, &lib);
     let failures = judge(&planned, &checked);
@@ -281,7 +343,7 @@ fn bundled_samples_are_safe_or_not_written() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-plans");
     let _ = std::fs::remove_dir_all(&out);
     std::fs::create_dir_all(&out).unwrap();
-    let mut planned = Vec::new();
+    let mut jobs = Vec::new();
     for (n, _) in thinplan_import::SAMPLES {
         let step = out.join(format!("{n}.step"));
         sh(
@@ -290,8 +352,9 @@ fn bundled_samples_are_safe_or_not_written() {
                 .arg(&step),
             "export-step",
         );
-        planned.push(plan(&format!("builtin:{n}"), n, &out));
+        jobs.push((format!("builtin:{n}"), n.to_string()));
     }
+    let planned = plan_all(&jobs, &out);
     let lib = repo().join("knowledge/tools/endmills_12_20.ron");
     let checked = check(&py, &out, &out, &lib);
     let failures = judge(&planned, &checked);

@@ -506,13 +506,50 @@ impl ThinplanApp {
             ui.add(egui::TextEdit::singleline(&mut self.forms.sheet_path).id_salt("sheet path"));
             ui.end_row();
         });
-        let ready = self
-            .state
-            .plan()
-            .is_some_and(|p| p.stages_done.contains(&Stage::Order));
+        let verification = self.state.plan().and_then(|p| p.verification.as_ref());
+        let verdict = verification.map(|v| v.verdict);
+        match verification {
+            None => {
+                ui.label("verdict: not verified (run all stages)");
+            }
+            Some(v) => {
+                let colour = match v.verdict {
+                    thinplan_plan::Verdict::Safe => egui::Color32::from_rgb(40, 140, 60),
+                    thinplan_plan::Verdict::Incomplete => egui::Color32::from_rgb(190, 130, 20),
+                    thinplan_plan::Verdict::Unsafe => egui::Color32::from_rgb(200, 40, 40),
+                };
+                ui.colored_label(colour, format!("verdict: {}", v.verdict.name()));
+                for l in &v.left {
+                    ui.label(format!(
+                        "left {:.1} mm³ ({})",
+                        l.volume_mm3,
+                        l.reason.name()
+                    ));
+                }
+                if !v.removed.is_empty() {
+                    ui.label(format!(
+                        "{} operation(s) removed by the verification",
+                        v.removed.len()
+                    ));
+                }
+                for p in v.problems.iter().take(5) {
+                    ui.label(format!(
+                        "{} by {}",
+                        p.kind.name(),
+                        p.operation
+                            .map_or_else(|| "-".to_string(), |o| o.to_string())
+                    ));
+                }
+            }
+        }
+        let ready = verdict.is_some_and(|v| v != thinplan_plan::Verdict::Unsafe);
         if ui
             .add_enabled(ready, egui::Button::new("Export G-code and sheet"))
-            .on_disabled_hover_text("run all stages first")
+            .on_disabled_hover_text(if verdict.is_some() {
+                "the verification found the program unsafe: no program is written"
+            } else {
+                "run all stages first"
+            })
             .clicked()
         {
             let g = PathBuf::from(self.forms.gcode_path.trim());

@@ -868,8 +868,8 @@ impl AppState {
         }
         let s = self.session.as_ref().ok_or("no part open")?;
         let plan = &s.plan;
-        if !plan.stages_done.contains(&Stage::Order) {
-            return Err("the plan has no ordered operations yet: run all stages first".into());
+        if !plan.stages_done.contains(&Stage::Verify) {
+            return Err("the plan is not verified yet: run all stages first".into());
         }
         let k = &s.knowledge;
         let program = thinplan_pipeline::output::write_program(plan, k, post_id, gcode, None)?;

@@ -510,6 +510,17 @@ fn export_writes_gcode_that_parses_and_a_sheet_naming_every_operation() {
     run_all(&mut h);
     h.get_by_label("Export").click();
     h.run_steps(2);
+    // The verification's verdict is shown before anything is exported.
+    let verdict = h
+        .state()
+        .state
+        .plan()
+        .unwrap()
+        .verification
+        .clone()
+        .unwrap();
+    assert_ne!(verdict.verdict, thinplan_plan::Verdict::Unsafe);
+    h.get_by_label(&format!("verdict: {}", verdict.verdict.name()));
     h.get_by_label("Export G-code and sheet").click();
     h.run_steps(2);
     assert!(gcode.exists(), "{}", h.state().state.message);
@@ -523,6 +534,7 @@ fn export_writes_gcode_that_parses_and_a_sheet_naming_every_operation() {
     for o in &plan.operations {
         assert!(html.contains(&o.id.to_string()), "{} missing", o.id);
     }
+    assert!(html.contains("Verification"), "the sheet shows the verdict");
     // Atomic writes leave no temporary files beside them.
     let names: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()

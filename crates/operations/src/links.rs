@@ -666,7 +666,7 @@ fn lower_inside(
             }
         }
         let m = &mv[i];
-        if let Some(ramp) = plunge_as_ramp(pos, m, mv.get(i + 1), map, tool, entry, view) {
+        if let Some(ramp) = plunge_as_ramp(pos, m, &mv[i + 1..], map, tool, entry, view) {
             for r in ramp {
                 if r.region != Region3::Rapid {
                     map.cut(
@@ -710,7 +710,7 @@ fn lower_inside(
 fn plunge_as_ramp(
     pos: DVec3,
     m: &PathMove,
-    next: Option<&PathMove>,
+    next: &[PathMove],
     map: &HeightMap,
     tool: &Tool,
     (angle_deg, max_plunge_mm3): (f64, f64),
@@ -731,7 +731,7 @@ fn plunge_as_ramp(
         pos,
         m.to,
         stock,
-        next?,
+        next,
         angle_deg,
         RAMP_RUN_DIAMETERS * tool.diameter,
         view,

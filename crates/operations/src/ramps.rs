@@ -23,14 +23,16 @@ pub(crate) const MIN_RUN: f64 = 0.5;
 /// Air above the stock where the ramp starts, mm.
 pub(crate) const RAMP_START_CLEARANCE: f64 = 0.5;
 
-/// The move a ramp runs along, from the descent's end: a straight line or
-/// an arc about an axis along up, measured by its plan-view length.
-enum Along {
+/// One piece of the path a ramp runs along: a straight line or an arc
+/// about an axis along up, from `from`, measured by its plan-view length.
+enum Piece {
     Line {
+        from: DVec3,
         dir: DVec3,
         len: f64,
     },
     Arc {
+        from: DVec3,
         centre: DVec3,
         axis: DVec3,
         ccw: bool,
@@ -40,14 +42,15 @@ enum Along {
     },
 }
 
-impl Along {
-    fn of(to: DVec3, next: &PathMove, view: &View) -> Option<Along> {
+impl Piece {
+    fn of(from: DVec3, m: &PathMove, view: &View) -> Option<Piece> {
         let up = view.up();
-        match &next.arc {
+        match &m.arc {
             None => {
-                let flat = (next.to - to).reject_from(up);
+                let flat = (m.to - from).reject_from(up);
                 let len = flat.length();
-                (len > 1e-9).then(|| Along::Line {
+                (len > 1e-9).then(|| Piece::Line {
+                    from,
                     dir: flat / len,
                     len,
                 })
@@ -57,8 +60,8 @@ impl Along {
                 if axis.dot(up).abs() < 1.0 - 1e-9 {
                     return None;
                 }
-                let u0 = (to - arc.centre).reject_from(axis);
-                let u1 = (next.to - arc.centre).reject_from(axis);
+                let u0 = (from - arc.centre).reject_from(axis);
+                let u1 = (m.to - arc.centre).reject_from(axis);
                 let r = u0.length();
                 if r < 1e-6 {
                     return None;
@@ -77,7 +80,8 @@ impl Along {
                 } else {
                     tau - theta
                 };
-                Some(Along::Arc {
+                Some(Piece::Arc {
+                    from,
                     centre: arc.centre,
                     axis,
                     ccw,
@@ -91,15 +95,16 @@ impl Along {
 
     fn len(&self) -> f64 {
         match self {
-            Along::Line { len, .. } | Along::Arc { len, .. } => *len,
+            Piece::Line { len, .. } | Piece::Arc { len, .. } => *len,
         }
     }
 
-    /// The plan position `s` along it (z as at `to`).
-    fn at(&self, to: DVec3, s: f64) -> DVec3 {
+    /// The plan position `s` along it (height as at its start).
+    fn at(&self, s: f64) -> DVec3 {
         match self {
-            Along::Line { dir, .. } => to + *dir * s,
-            Along::Arc {
+            Piece::Line { from, dir, .. } => *from + *dir * s,
+            Piece::Arc {
+                from,
                 centre,
                 axis,
                 ccw,
@@ -109,26 +114,17 @@ impl Along {
             } => {
                 let phi = if *ccw { s / r } else { -s / r };
                 let p = *centre + *u0 * phi.cos() + axis.cross(*u0) * phi.sin();
-                p + *axis * (to - p).dot(*axis)
+                p + *axis * (*from - p).dot(*axis)
             }
         }
     }
 
-    /// The move from `s0` to `s1` along it, ending at height `z`.
-    fn piece(
-        &self,
-        to: DVec3,
-        s1: f64,
-        backwards: bool,
-        z: f64,
-        next: &PathMove,
-        view: &View,
-    ) -> PathMove {
-        let p = self.at(to, s1);
-        let end = p + view.up() * (z - view.z(p));
+    /// The move to `s` along it at height `z`, travelling backwards or not.
+    fn to(&self, s: f64, backwards: bool, z: f64, like: &PathMove, view: &View) -> PathMove {
+        let p = self.at(s);
         let arc = match self {
-            Along::Line { .. } => None,
-            Along::Arc {
+            Piece::Line { .. } => None,
+            Piece::Arc {
                 centre, axis, ccw, ..
             } => Some(ArcMove {
                 centre: *centre,
@@ -137,26 +133,88 @@ impl Along {
             }),
         };
         PathMove {
-            to: end,
+            to: p + view.up() * (z - view.z(p)),
             arc,
-            feed: next.feed,
-            region: next.region,
+            feed: like.feed,
+            region: like.region,
         }
     }
 }
 
+/// The level's own moves from the descent's end, as pieces, until `max`
+/// of plan length (or the level changes height or is left).
+fn chain(to: DVec3, next: &[PathMove], max: f64, view: &View) -> Vec<Piece> {
+    let mut out = Vec::new();
+    let mut at = to;
+    let mut total = 0.0;
+    for m in next {
+        if total >= max || m.region == Region3::Rapid || (view.z(m.to) - view.z(to)).abs() > 1e-6 {
+            break;
+        }
+        let Some(p) = Piece::of(at, m, view) else {
+            break;
+        };
+        total += p.len();
+        out.push(p);
+        at = m.to;
+    }
+    out
+}
+
+/// The moves along `chain` from plan length `s0` to `s1` (either way), the
+/// height going linearly from `z0` to `z1`.
+fn travel(
+    chain: &[Piece],
+    s0: f64,
+    s1: f64,
+    z0: f64,
+    z1: f64,
+    like: &PathMove,
+    view: &View,
+) -> Vec<PathMove> {
+    let mut out = Vec::new();
+    let backwards = s1 < s0;
+    let (lo, hi) = (s0.min(s1), s0.max(s1));
+    let z_at = |s: f64| {
+        if (s1 - s0).abs() < 1e-12 {
+            z1
+        } else {
+            z0 + (z1 - z0) * (s - s0) / (s1 - s0)
+        }
+    };
+    let mut start = 0.0;
+    let mut parts: Vec<(usize, f64, f64)> = Vec::new();
+    for (k, p) in chain.iter().enumerate() {
+        let end = start + p.len();
+        let a = lo.max(start);
+        let b = hi.min(end);
+        if b > a + 1e-12 {
+            parts.push((k, a - start, b - start));
+        }
+        start = end;
+    }
+    if backwards {
+        parts.reverse();
+    }
+    for (k, a, b) in parts {
+        let piece_start = chain[..k].iter().map(Piece::len).sum::<f64>();
+        let end = if backwards { a } else { b };
+        out.push(chain[k].to(end, backwards, z_at(piece_start + end), like, view));
+    }
+    out
+}
+
 /// A straight feed descent to `to` at the plan point of `from`, into stock
 /// standing up to `stock_top`, as moves from `from`: down in air to just
-/// above the stock, then passes back and forth along `next` (from `to`
-/// towards its end, at most `max_run` of it), each dropping at most
-/// `tan(angle)` of its length, ending at `to`. `None` when the following
-/// move gives no room or the ramp would need more than [`MAX_PASSES`]
-/// passes.
+/// above the stock, then passes back and forth along the level's moves that
+/// follow (`next`, at most `max_run` of them), each dropping at most
+/// `tan(angle)` of its length, ending at `to`. `None` when the level gives
+/// no room or the ramp would need more than [`MAX_PASSES`] passes.
 pub(crate) fn ramp_entry(
     from: DVec3,
     to: DVec3,
     stock_top: f64,
-    next: &PathMove,
+    next: &[PathMove],
     angle_deg: f64,
     max_run: f64,
     view: &View,
@@ -164,13 +222,14 @@ pub(crate) fn ramp_entry(
     if !(angle_deg > 0.0 && angle_deg <= 89.0) {
         return None;
     }
+    let like = next.first()?;
     let z_to = view.z(to);
     let top = (stock_top + RAMP_START_CLEARANCE).min(view.z(from));
     if top <= z_to + 1e-9 {
         return None;
     }
-    let along = Along::of(to, next, view)?;
-    let run = along.len().min(max_run);
+    let chain = chain(to, next, max_run, view);
+    let run = chain.iter().map(Piece::len).sum::<f64>().min(max_run);
     if run < MIN_RUN {
         return None;
     }
@@ -186,18 +245,23 @@ pub(crate) fn ramp_entry(
         out.push(PathMove {
             to: to + view.up() * (top - z_to),
             arc: None,
-            feed: next.feed,
+            feed: like.feed,
             region: Region3::Rapid,
         });
     }
     for k in 1..=passes {
         let forward = k % 2 == 1;
-        let s1 = if forward { run } else { 0.0 };
-        out.push(along.piece(to, s1, !forward, top - step * k as f64, next, view));
+        let (s0, s1) = if forward { (0.0, run) } else { (run, 0.0) };
+        let z0 = top - step * (k - 1) as f64;
+        out.extend(travel(&chain, s0, s1, z0, z0 - step, like, view));
     }
     if passes % 2 == 1 {
         // Back along the level to where the level's own moves begin.
-        out.push(along.piece(to, 0.0, true, z_to, next, view));
+        out.extend(travel(&chain, run, 0.0, z_to, z_to, like, view));
+    }
+    // The last move ends exactly where the level begins.
+    if let Some(last) = out.last_mut() {
+        last.to = to;
     }
     Some(out)
 }
@@ -225,7 +289,7 @@ mod tests {
                 from,
                 to,
                 top,
-                &next(DVec3::new(run, 0.0, 3.0)),
+                &[next(DVec3::new(run, 0.0, 3.0))],
                 angle,
                 50.0,
                 &view,
@@ -287,16 +351,45 @@ mod tests {
         }
     }
 
+    /// A level that begins with a short move: the ramp runs on along the
+    /// moves after it, and stays on the level's path.
+    #[test]
+    fn a_ramp_runs_along_several_short_moves() {
+        let view = View::new(DVec3::Z);
+        let to = DVec3::new(0.0, 0.0, 3.0);
+        let path = [
+            next(DVec3::new(0.1, 0.0, 3.0)),
+            next(DVec3::new(0.1, 10.0, 3.0)),
+            next(DVec3::new(20.0, 10.0, 3.0)),
+        ];
+        let moves = ramp_entry(to + DVec3::Z * 20.0, to, 9.0, &path, 5.0, 24.0, &view).unwrap();
+        assert_eq!(moves.last().unwrap().to, to);
+        let on_path = |p: DVec3| {
+            (p.y.abs() < 1e-9 && p.x <= 0.1 + 1e-9)
+                || ((p.x - 0.1).abs() < 1e-9 && p.y <= 10.0 + 1e-9)
+                || ((p.y - 10.0).abs() < 1e-9 && p.x <= 20.0 + 1e-9)
+        };
+        let mut p = to + DVec3::Z * 20.0;
+        for m in &moves {
+            if m.region != Region3::Rapid {
+                assert!(on_path(m.to), "{:?} leaves the level's path", m.to);
+                let d = m.to - p;
+                assert!(d.z >= -d.truncate().length() * 5f64.to_radians().tan() - 1e-9);
+            }
+            p = m.to;
+        }
+    }
+
     #[test]
     fn no_room_or_no_stock_gives_no_ramp() {
         let view = View::new(DVec3::Z);
         let from = DVec3::new(0.0, 0.0, 25.0);
         let to = DVec3::new(0.0, 0.0, 3.0);
         let short = next(DVec3::new(0.1, 0.0, 3.0));
-        assert!(ramp_entry(from, to, 13.0, &short, 3.0, 50.0, &view).is_none());
+        assert!(ramp_entry(from, to, 13.0, &[short], 3.0, 50.0, &view).is_none());
         let long = next(DVec3::new(30.0, 0.0, 3.0));
-        assert!(ramp_entry(from, to, 2.0, &long, 3.0, 50.0, &view).is_none());
+        assert!(ramp_entry(from, to, 2.0, &[long.clone()], 3.0, 50.0, &view).is_none());
         // 22 mm at 0.01° over 30 mm: more passes than allowed.
-        assert!(ramp_entry(from, to, 25.0, &long, 0.01, 50.0, &view).is_none());
+        assert!(ramp_entry(from, to, 25.0, &[long], 0.01, 50.0, &view).is_none());
     }
 }

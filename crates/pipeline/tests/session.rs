@@ -22,9 +22,11 @@ fn runs_stages_in_order_with_progress() {
             Stage::Determine,
             Stage::Resolve,
             Stage::Operations,
-            Stage::Order
+            Stage::Order,
+            Stage::Verify
         ]
     );
+    assert!(s.plan.verification.is_some());
     assert!(s.plan.stages_done.contains(&Stage::Determine));
     assert!(!s.plan.machining_features.is_empty());
 }
@@ -100,4 +102,44 @@ fn a_full_plan_round_trips_through_its_file() {
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Verifying again starts from what stage 8 planned: operations the last
+/// verification removed come back, and the verdict is made afresh.
+#[test]
+fn verifying_again_restores_removed_operations() {
+    let mut s = session("builtin:tall_rib");
+    s.run_all(|_| {}).expect("plans");
+    let planned = s.plan.verification.as_ref().unwrap().planned_order.clone();
+    // As if the verification had taken the first operation out.
+    let first = s.plan.operation_order.remove(0);
+    let at = s
+        .plan
+        .operations
+        .iter()
+        .position(|o| o.id == first)
+        .unwrap();
+    let op = s.plan.operations.remove(at);
+    let v = s.plan.verification.as_mut().unwrap();
+    v.removed.push(thinplan_plan::RemovedOperation {
+        operation: first,
+        problem: thinplan_plan::Problem {
+            kind: thinplan_plan::ProblemKind::PlungeIntoStock,
+            operation: Some(first),
+            line: None,
+            at: [0.0; 3],
+            depth_mm: 1.0,
+            volume_mm3: 1.0,
+        },
+        round: 1,
+        removed: op,
+    });
+    s.run_stage(Stage::Verify).expect("verify again");
+    let v = s.plan.verification.as_ref().unwrap();
+    assert_eq!(v.planned_order, planned);
+    assert!(s.plan.operations.iter().any(|o| o.id == first));
+    assert_eq!(
+        s.plan.operation_order.len() + v.removed.len(),
+        planned.len()
+    );
 }

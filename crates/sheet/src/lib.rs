@@ -136,6 +136,8 @@ pub fn setup_sheet_with_warnings(
     let frame = thinplan_collision::setup_frame(plan.setup.up);
     let part = thinplan_collision::part_bodies(brep, &frame);
 
+    verification(&mut h, plan);
+
     // Part and set-up.
     let p = &plan.part;
     h.push_str("<h2>Part and set-up</h2>\n<table>\n");
@@ -626,4 +628,62 @@ fn top_view(
         "— machining features by owner; grey: the part's sections; dashed: the blank.</p>\n",
     );
     s
+}
+
+/// Stage 9's verdict first: the one thing a planner must read before the
+/// program runs.
+fn verification(h: &mut String, plan: &Plan) {
+    h.push_str("<h2>Verification</h2>\n");
+    let Some(v) = &plan.verification else {
+        h.push_str("<p><b>Not verified</b>: planning stopped before stage 9. Do not run a program made from this plan.</p>\n");
+        return;
+    };
+    let _ = writeln!(
+        h,
+        "<p>Verdict: <b>{}</b> (the program replayed on a {} mm Z-map, {} replay(s)).</p>",
+        escape(&v.verdict.name().to_uppercase()),
+        v.cell_mm,
+        v.rounds
+    );
+    if !v.left.is_empty() {
+        h.push_str(
+            "<table>\n<tr><th>material left</th><th>mm³</th><th>thickest mm</th><th>at</th></tr>\n",
+        );
+        for l in &v.left {
+            let at =
+                l.at.map_or(String::new(), |a| format!("({:.1}, {:.1})", a[0], a[1]));
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{:.2}</td><td>{:.2}</td><td>{}</td></tr>",
+                escape(l.reason.name()),
+                l.volume_mm3,
+                l.worst_mm,
+                at
+            );
+        }
+        h.push_str("</table>\n");
+    }
+    if !v.removed.is_empty() || !v.problems.is_empty() {
+        h.push_str("<table>\n<tr><th>operation</th><th>problem</th><th>at</th><th>depth mm</th><th></th></tr>\n");
+        let rows = v
+            .removed
+            .iter()
+            .map(|r| (&r.problem, "removed"))
+            .chain(v.problems.iter().map(|p| (p, "in the program")));
+        for (p, what) in rows {
+            let op = p
+                .operation
+                .map_or_else(|| "-".to_string(), |o| o.to_string());
+            let _ = writeln!(
+                h,
+                "<tr><td>{op}</td><td>{}</td><td>({:.2}, {:.2}, {:.2})</td><td>{:.3}</td><td>{what}</td></tr>",
+                escape(p.kind.name()),
+                p.at[0],
+                p.at[1],
+                p.at[2],
+                p.depth_mm
+            );
+        }
+        h.push_str("</table>\n");
+    }
 }

@@ -118,6 +118,9 @@ pub struct StockReport {
     pub removed_volume_mm3: f64,
     pub air_cutting: AirCutting,
     pub crashes: Vec<Crash>,
+    /// Operations undone for a crash or gouge, with it (only when
+    /// [`MoveChecks::operations`] names the operations).
+    pub excluded: Vec<(u32, Crash)>,
     pub gouges: DefectSummary,
     /// Leftover a tool could have taken down to the part.
     pub leftover_missed: DefectSummary,
@@ -196,16 +199,21 @@ pub fn simulate(
         }
     };
     let mut stock = ZMap::new(blank, cfg.cell)?;
+    let grid = stock.grid;
+    let floor = blank.min.z as f32;
+    let (field, pw) = compare::part_heights(part, &grid, blank.min.z, cfg.tol);
+    warnings.extend(pw);
+    if !cfg.checks.operations.is_empty() {
+        // Operations are judged as they cut: a gouge undoes its operation.
+        let tol = cfg.tol as f32;
+        stock.guard = Some(field.lo.iter().map(|&l| l - tol).collect());
+    }
     let t0 = Instant::now();
     let rs = stock.replay_checked(program, tools, &cfg.checks)?;
     let replay_time = t0.elapsed();
     warnings.extend(rs.warnings.iter().cloned());
 
     let t1 = Instant::now();
-    let grid = stock.grid;
-    let floor = blank.min.z as f32;
-    let (field, pw) = compare::part_heights(part, &grid, blank.min.z, cfg.tol);
-    warnings.extend(pw);
     let part_top = field.top.clone();
     let ideal = if rs.tools_used.is_empty() {
         part_top.clone()
@@ -294,7 +302,10 @@ pub fn simulate(
         })
         .collect();
     let report = StockReport {
-        clean: gouges.cells == 0 && missed.cells == 0 && rs.crashes.is_empty(),
+        clean: gouges.cells == 0
+            && missed.cells == 0
+            && rs.crashes.is_empty()
+            && rs.excluded.is_empty(),
         cell_mm: cfg.cell,
         tolerance_mm: cfg.tol,
         blank,
@@ -316,6 +327,7 @@ pub fn simulate(
             },
         },
         crashes: rs.crashes,
+        excluded: rs.excluded,
         gouges,
         leftover_missed: missed,
         leftover_unreachable: unreachable,

@@ -172,6 +172,9 @@ pub struct CutStats {
     pub max_depth: f64,
     /// Where that was (cell centre, new height).
     pub deepest: DVec3,
+    /// Deepest cut below the guard ([`ZMap::guard`]), mm, and where.
+    pub gouge: f64,
+    pub gouge_at: DVec3,
 }
 
 impl CutStats {
@@ -182,6 +185,10 @@ impl CutStats {
         if o.max_depth > self.max_depth {
             self.max_depth = o.max_depth;
             self.deepest = o.deepest;
+        }
+        if o.gouge > self.gouge {
+            self.gouge = o.gouge;
+            self.gouge_at = o.gouge_at;
         }
     }
 
@@ -204,6 +211,9 @@ pub enum CrashKind {
     /// A feed move that cuts a column of material taller than the tool's
     /// flute length ([`MoveChecks::flute_length`]): the shank cuts.
     ShankContact,
+    /// A move that cuts below the part (only with a guard, see
+    /// [`MoveChecks::operations`]).
+    Gouge,
 }
 
 /// Checks of the moves themselves, beside the stock they leave. The default
@@ -223,6 +233,13 @@ pub struct MoveChecks {
     /// Cuts shallower than this (mm) are not counted as plunges or shank
     /// contact: the comparison tolerance.
     pub tol: f64,
+    /// The program's operations, `(first line, id)` in line order. When
+    /// given, an operation one of whose moves crashes (or, with a guard,
+    /// gouges) is undone and the rest of it skipped, so that the operations
+    /// after it are judged on the stock the program without it leaves; the
+    /// link into the next operation, which would then start elsewhere, is
+    /// not swept. [`ReplayStats::excluded`] lists them.
+    pub operations: Vec<(usize, u32)>,
 }
 
 impl MoveChecks {
@@ -274,6 +291,8 @@ pub struct ReplayStats {
     pub crashes: Vec<Crash>,
     /// Tools that made feed moves, ascending.
     pub tools_used: Vec<u32>,
+    /// Operations undone for a crash, with it (see [`MoveChecks::operations`]).
+    pub excluded: Vec<(u32, Crash)>,
     pub warnings: Vec<String>,
 }
 
@@ -298,6 +317,16 @@ pub struct ZMap {
     pub top: Vec<f32>,
     /// The program line that last lowered each cell (0 = never cut).
     pub last_line: Vec<u32>,
+    /// The lowest each cell may be cut without a gouge (the part less the
+    /// tolerance); a cut below it is reported in [`CutStats::gouge`].
+    pub guard: Option<Vec<f32>>,
+    /// While an operation is replayed in exclusion mode: each cell's state
+    /// before its first change, to undo it.
+    undo: Option<Vec<(usize, f32, u32)>>,
+    /// Per cell, the undo generation that saved it last: each cell is saved
+    /// once per operation.
+    saved: Vec<u32>,
+    generation: u32,
 }
 
 impl ZMap {
@@ -310,6 +339,10 @@ impl ZMap {
             blank,
             top: vec![blank.max.z as f32; grid.len()],
             last_line: vec![0; grid.len()],
+            guard: None,
+            undo: None,
+            saved: Vec::new(),
+            generation: 0,
         })
     }
 
@@ -338,12 +371,26 @@ impl ZMap {
         let cur = self.top[k];
         if z < cur {
             let depth = (cur - z) as f64;
+            if let Some(u) = self.undo.as_mut() {
+                if self.saved[k] != self.generation {
+                    self.saved[k] = self.generation;
+                    u.push((k, cur, self.last_line[k]));
+                }
+            }
             if depth > 1e-6 {
                 st.lowered += 1;
                 st.volume += depth * self.grid.cell_area();
                 self.last_line[k] = line;
             }
             self.top[k] = z;
+            if let Some(g) = self.guard.as_ref() {
+                let below = (g[k] - z) as f64;
+                if below > st.gouge {
+                    st.gouge = below;
+                    let c = self.grid.center(i, j);
+                    st.gouge_at = DVec3::new(c.x, c.y, z as f64);
+                }
+            }
             if depth > st.max_depth {
                 st.max_depth = depth;
                 let c = self.grid.center(i, j);
@@ -554,7 +601,36 @@ impl ZMap {
         let mut out = ReplayStats::default();
         let mut used = std::collections::BTreeSet::new();
         let mut warned_no_tool = false;
+        let ops = &checks.operations;
+        let exclusion = !ops.is_empty();
+        // The operation of the current move (index into `ops`), whether it
+        // is excluded, and whether the one before it was (its successor's
+        // link then starts where the program without it would not).
+        let mut cur: Option<usize> = None;
+        let mut skip_op = false;
+        let mut after_excluded = false;
+        let mut fed_in_op = false;
         for m in &program.moves {
+            if exclusion {
+                let k = ops.partition_point(|(l, _)| *l <= m.line);
+                let now = k.checked_sub(1);
+                if now != cur {
+                    after_excluded = skip_op;
+                    skip_op = false;
+                    fed_in_op = false;
+                    cur = now;
+                    self.begin_undo(now.is_some());
+                }
+                if skip_op {
+                    continue;
+                }
+                if m.is_feed() {
+                    fed_in_op = true;
+                }
+                if after_excluded && !fed_in_op && !m.is_feed() {
+                    continue;
+                }
+            }
             if !m.end.is_finite() {
                 continue; // only some axes known yet: nothing to sweep
             }
@@ -624,18 +700,57 @@ impl ZMap {
             } else {
                 None
             };
-            if let Some(kind) = crash {
-                out.crashes.push(Crash {
-                    line: m.line,
-                    kind,
-                    volume_mm3: st.volume,
-                    depth_mm: st.max_depth,
-                    at: st.deepest.to_array(),
-                });
+            let crash = crash.map(|kind| Crash {
+                line: m.line,
+                kind,
+                volume_mm3: st.volume,
+                depth_mm: st.max_depth,
+                at: st.deepest.to_array(),
+            });
+            let gouge = (st.gouge > checks.tol.max(REMOVAL_EPS)).then(|| Crash {
+                line: m.line,
+                kind: CrashKind::Gouge,
+                volume_mm3: 0.0,
+                depth_mm: st.gouge,
+                at: st.gouge_at.to_array(),
+            });
+            match (cur, crash.or(gouge)) {
+                (Some(k), Some(c)) if exclusion => {
+                    self.undo_operation();
+                    out.excluded.push((ops[k].1, c));
+                    skip_op = true;
+                }
+                (_, Some(c)) if c.kind != CrashKind::Gouge => out.crashes.push(c),
+                _ => {}
             }
         }
+        self.undo = None;
         out.tools_used = used.into_iter().collect();
         Ok(out)
+    }
+
+    /// Starts saving cells for a new operation (or stops, outside one).
+    fn begin_undo(&mut self, on: bool) {
+        if self.saved.len() != self.top.len() {
+            self.saved = vec![0; self.top.len()];
+        }
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.saved.fill(0);
+            self.generation = 1;
+        }
+        self.undo = on.then(Vec::new);
+    }
+
+    /// Restores every cell the current operation changed.
+    fn undo_operation(&mut self) {
+        if let Some(u) = self.undo.take() {
+            for &(k, top, line) in u.iter() {
+                self.top[k] = top;
+                self.last_line[k] = line;
+            }
+        }
+        self.begin_undo(true);
     }
 }
 

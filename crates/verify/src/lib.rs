@@ -19,7 +19,8 @@ use thinplan_plan::{
     ProvenanceSource, Refusal, RemovedOperation, Stage, Verdict, Verification,
 };
 use thinplan_stocksim::{
-    parse, parse_tool_table, simulate, CellClass, CrashKind, DefectSummary, MoveChecks, SimConfig,
+    parse, parse_tool_table, simulate, CellClass, Crash, CrashKind, DefectSummary, MoveChecks,
+    SimConfig,
 };
 
 /// Why the verification could not run at all.
@@ -224,26 +225,39 @@ fn replay(
             max_descent_deg: Some(cfg.max_descent_deg),
             max_plunge_mm3: cfg.max_plunge_mm3,
             tol: cfg.tolerance,
+            operations: nc
+                .operation_lines
+                .iter()
+                .map(|(l, id)| (*l, id.0))
+                .collect(),
         },
     };
     let sim = simulate(brep, &program, &table, &sim_cfg)
         .map_err(|e| VerifyError(format!("verification: the replay failed: {e}")))?;
-    let mut problems = Vec::new();
-    for c in &sim.report.crashes {
-        let kind = match c.kind {
+    let problem = |c: &Crash, operation: Option<OperationId>| Problem {
+        kind: match c.kind {
             CrashKind::RapidIntoStock => ProblemKind::RapidThroughStock,
             CrashKind::SpindleOff => ProblemKind::SpindleOff,
             CrashKind::PlungeIntoStock => ProblemKind::PlungeIntoStock,
             CrashKind::ShankContact => ProblemKind::ShankContact,
-        };
-        problems.push(Problem {
-            kind,
-            operation: nc.operation_at(c.line),
-            line: Some(c.line),
-            at: c.at,
-            depth_mm: c.depth_mm,
-            volume_mm3: c.volume_mm3,
-        });
+            CrashKind::Gouge => ProblemKind::Gouge,
+        },
+        operation,
+        line: Some(c.line),
+        at: c.at,
+        depth_mm: c.depth_mm,
+        volume_mm3: c.volume_mm3,
+    };
+    // Operations undone during the replay, each judged on the stock the
+    // ones before it leave; then what no operation owns.
+    let mut problems: Vec<Problem> = sim
+        .report
+        .excluded
+        .iter()
+        .map(|(id, c)| problem(c, Some(OperationId(*id))))
+        .collect();
+    for c in &sim.report.crashes {
+        problems.push(problem(c, nc.operation_at(c.line)));
     }
     problems.extend(gouges(&sim, &nc));
     problems.extend(holder_collisions(plan, k, brep));
