@@ -668,14 +668,7 @@ fn lower_inside(
         let m = &mv[i];
         if let Some(ramp) = plunge_as_ramp(pos, m, &mv[i + 1..], map, tool, entry, view) {
             for r in ramp {
-                if r.region != Region3::Rapid {
-                    map.cut(
-                        view.xy(pos),
-                        view.xy(r.to),
-                        view.z(pos).max(view.z(r.to)),
-                        tool,
-                    );
-                }
+                cut_along(map, pos, &r, tool, local, view);
                 pos = r.to;
                 out.push(r);
             }
@@ -683,26 +676,40 @@ fn lower_inside(
             i += 1;
             continue;
         }
-        if m.region != Region3::Rapid {
-            let pts: Vec<DVec3> = if m.arc.is_none() {
-                vec![m.to]
-            } else {
-                move_points(local.point(pos), &local.lmove(m), CHORD)
-                    .into_iter()
-                    .map(|p| local.part(p))
-                    .collect()
-            };
-            let mut a = pos;
-            for b in pts {
-                map.cut(view.xy(a), view.xy(b), view.z(a).max(view.z(b)), tool);
-                a = b;
-            }
-        }
+        cut_along(map, pos, m, tool, local, view);
         pos = m.to;
         out.push(m.clone());
         i += 1;
     }
     (out, lowered)
+}
+
+/// Lowers the map where the feed move `m` from `pos` cuts (arcs as chords
+/// within [`CHORD`]).
+fn cut_along(
+    map: &mut HeightMap,
+    pos: DVec3,
+    m: &PathMove,
+    tool: &Tool,
+    local: &Local,
+    view: &View,
+) {
+    if m.region == Region3::Rapid {
+        return;
+    }
+    let pts: Vec<DVec3> = if m.arc.is_none() {
+        vec![m.to]
+    } else {
+        move_points(local.point(pos), &local.lmove(m), CHORD)
+            .into_iter()
+            .map(|p| local.part(p))
+            .collect()
+    };
+    let mut a = pos;
+    for b in pts {
+        map.cut(view.xy(a), view.xy(b), view.z(a).max(view.z(b)), tool);
+        a = b;
+    }
 }
 
 /// `m` as a ramp entry ([`crate::ramps`]) when it is a straight feed

@@ -142,13 +142,15 @@ impl Piece {
 }
 
 /// The level's own moves from the descent's end, as pieces, until `max`
-/// of plan length (or the level changes height or is left).
+/// of plan length (or the path rises or is left).
 fn chain(to: DVec3, next: &[PathMove], max: f64, view: &View) -> Vec<Piece> {
     let mut out = Vec::new();
     let mut at = to;
     let mut total = 0.0;
     for m in next {
-        if total >= max || m.region == Region3::Rapid || (view.z(m.to) - view.z(to)).abs() > 1e-6 {
+        // The level's own path, its ramp down included; not a move that
+        // climbs back above the descent's end (a link).
+        if total >= max || m.region == Region3::Rapid || view.z(m.to) > view.z(to) + 1e-6 {
             break;
         }
         let Some(p) = Piece::of(at, m, view) else {
