@@ -31,7 +31,7 @@ use crate::{length_and_time, resources, Kind, OperationsError};
 
 /// Side of a height-map cell, mm. Any size is safe (cells err towards
 /// material); finer cells let links run lower beside walls.
-const CELL: f64 = 0.5;
+const CELL: f64 = 1.0;
 /// Most cells of a map: a larger part gets larger cells (4 M cells: 32 MB).
 const MAX_CELLS: f64 = 4.0e6;
 /// Arcs are followed by chords at most this long, mm; a chord strays at most
@@ -189,12 +189,15 @@ impl HeightMap {
     fn volume_under(&self, p: DVec2, z: f64, tool: &Tool) -> f64 {
         let r = 0.5 * tool.diameter;
         let rc = tool.corner_radius.clamp(0.0, r);
+        // Cells wholly under the tool: a wall the tool's rim only touches
+        // (a boundary pass beside it) is not stock under a descent.
+        let inside = r - self.cell * std::f64::consts::FRAC_1_SQRT_2;
         let (i0, i1, j0, j1) = self.cells(p, p, r);
         let mut v = 0.0;
         for j in j0..j1 {
             for i in i0..i1 {
                 let rho = self.centre(i, j).distance(p);
-                if rho > r {
+                if rho > inside {
                     continue;
                 }
                 let u = rho - (r - rc);
@@ -733,7 +736,9 @@ fn plunge_as_ramp(
     if map.volume_under(view.xy(m.to), view.z(m.to), tool) <= max_plunge_mm3 {
         return None;
     }
-    let stock = map.highest(view.xy(m.to), view.xy(m.to), 0.5 * tool.diameter);
+    // The highest stock wholly under the tool, as `volume_under` counts it.
+    let under = 0.5 * tool.diameter - map.cell * std::f64::consts::SQRT_2;
+    let stock = map.highest(view.xy(m.to), view.xy(m.to), under.max(0.0));
     crate::ramps::ramp_entry(
         pos,
         m.to,

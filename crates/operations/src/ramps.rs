@@ -136,7 +136,7 @@ impl Piece {
             to: p + view.up() * (z - view.z(p)),
             arc,
             feed: like.feed,
-            region: like.region,
+            region: Region3::FullCut,
         }
     }
 }

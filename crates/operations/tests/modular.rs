@@ -41,11 +41,21 @@ fn check_product_and_floor(f: &MachiningFeature, ops: &Operations, k: &Knowledge
                 }
                 continue;
             }
-            assert!(
-                p.z >= f.shape.z_min - 1e-9,
-                "{}: below the floor: {p}",
-                op.id
-            );
+            // A through feature (an open bottom on the blank's underside) is
+            // cut free below it by the corner radius and the breakthrough.
+            let floor = if f.bottom_adjacency == Adjacency::Open {
+                let rc = k
+                    .tool_set("endmills_12_20")
+                    .unwrap()
+                    .tools
+                    .iter()
+                    .map(|t| t.corner_radius)
+                    .fold(0.0, f64::max);
+                f.shape.z_min - rc - k.methods.breakthrough
+            } else {
+                f.shape.z_min
+            };
+            assert!(p.z >= floor - 1e-9, "{}: below the floor: {p}", op.id);
             for &(a, b, bulge, _) in &product {
                 let q = closest_on_edge(p.truncate(), a, b, bulge);
                 let d = q.distance(p.truncate());

@@ -109,10 +109,19 @@ fn deep_levels_keep_the_tool_out_of_a_taller_feature_that_stands() {
     let f = of(&plan, 0);
     let mut pts = Vec::new();
     let mut r = f64::INFINITY;
+    // The floor passes: at the floor, or below it where a through feature
+    // is cut free (`methods.breakthrough`).
+    let through = f.bottom_adjacency == thinplan_plan::Adjacency::Open;
     for op in ops.operations.iter().filter(|o| o.feature.0 == 0) {
         r = r.min(radius(&k, op));
+        let lowest = walk(op, 0.1)
+            .iter()
+            .filter(|(_, _, region)| is_cutting(*region))
+            .map(|(p, _, _)| p.z)
+            .fold(f64::INFINITY, f64::min);
+        let floor = if through { lowest } else { f.shape.z_min };
         for (p, _, region) in walk(op, 0.1) {
-            if is_cutting(region) && (p.z - f.shape.z_min).abs() < 1e-9 {
+            if is_cutting(region) && (p.z - floor).abs() < 1e-9 {
                 pts.push(p.truncate());
             }
         }

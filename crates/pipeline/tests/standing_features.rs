@@ -80,15 +80,16 @@ fn no_tool_centre_enters_a_feature_that_has_not_been_started() {
             .collect();
         // Rest passes stage 8 runs last, after every feature.
         let rest = |o: &Operation| thinplan_operations::runs_last(o);
+        let by_id: BTreeMap<_, &Operation> = plan.operations.iter().map(|o| (o.id, o)).collect();
         let mut first: BTreeMap<u32, usize> = BTreeMap::new();
         for (at, id) in plan.operation_order.iter().enumerate() {
-            let o = &plan.operations[id.0 as usize];
+            let o = by_id[id];
             if !rest(o) {
                 first.entry(o.feature.0).or_insert(at);
             }
         }
         for (at, id) in plan.operation_order.iter().enumerate() {
-            let o = &plan.operations[id.0 as usize];
+            let o = by_id[id];
             if rest(o) {
                 continue;
             }
