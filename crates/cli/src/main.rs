@@ -638,7 +638,26 @@ fn plan(
         knowledge,
     } = session;
 
-    let out = out.unwrap_or_else(|| default_out(&source));
+    // With no output named, the whole job goes to a folder of its own:
+    // plan, program, tool table and sheet.
+    let default_job = out.is_none()
+        && gcode.is_none()
+        && sheet.is_none()
+        && last == thinplan_pipeline::LAST_BUILT;
+    let (dir, stem) = default_dir(&source);
+    let job_program = dir.join(format!("{stem}.ngc"));
+    let job_table = dir.join(format!("{stem}.tbl"));
+    let job_sheet = dir.join(format!("{stem}.sheet.html"));
+    let (gcode, sheet) = if default_job {
+        let post = thinplan_knowledge::DEFAULT_POST;
+        (
+            Some((job_program.as_path(), post, Some(job_table.as_path()))),
+            Some(job_sheet.as_path()),
+        )
+    } else {
+        (gcode, sheet)
+    };
+    let out = out.unwrap_or_else(|| dir.join(format!("{stem}.plan.json")));
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| CliError {
             code: exit::OUTPUT,
@@ -852,18 +871,36 @@ fn gui(part: Option<String>) -> Result<(), CliError> {
     }
 }
 
-fn default_out(source: &str) -> PathBuf {
-    let stem = source
-        .strip_prefix("builtin:")
-        .map(str::to_string)
-        .unwrap_or_else(|| {
-            let name = Path::new(source)
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "part".into());
-            name.split('.').next().unwrap_or("part").to_string()
+/// The folder a plan's default outputs go to, and their stem:
+/// `out/NAME-HASH/` where HASH comes from the part's full path (two parts
+/// of one name in different folders never share a folder), or
+/// `out/builtin-NAME/` for a bundled sample.
+fn default_dir(source: &str) -> (PathBuf, String) {
+    if let Some(name) = source.strip_prefix("builtin:") {
+        return (
+            PathBuf::from("out").join(format!("builtin-{name}")),
+            name.to_string(),
+        );
+    }
+    let path = Path::new(source);
+    let stem = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .and_then(|n| n.split('.').next().map(str::to_string))
+        .filter(|n| !n.is_empty())
+        .unwrap_or_else(|| "part".into());
+    let full = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    // FNV-1a: a stable name, not a security measure.
+    let hash = full
+        .to_string_lossy()
+        .bytes()
+        .fold(0xcbf2_9ce4_8422_2325_u64, |h, b| {
+            (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
         });
-    PathBuf::from("out").join(format!("{stem}.plan.json"))
+    (
+        PathBuf::from("out").join(format!("{stem}-{:08x}", hash >> 32)),
+        stem,
+    )
 }
 
 fn size_wall(

@@ -9,8 +9,38 @@ use thinplan_plan::{
 fn planned(name: &str, k: Knowledge) -> Session {
     let setup = make_setup(&SetupRequest::default(), &k).expect("default set-up");
     let mut s = Session::open(&format!("builtin:{name}"), setup, k).expect("opens");
-    s.run_all(|_| {}).expect("plans through stage 8");
+    // Stage 8's program as it stands: the verification would take out the
+    // operations these tests look for.
+    s.run_to(
+        thinplan_plan::Stage::Order,
+        &std::sync::atomic::AtomicBool::new(false),
+        |_| {},
+    )
+    .expect("plans through stage 8");
     s
+}
+
+/// The same short stickout through stage 9: the operations whose holder
+/// comes down on the stock are taken out of the program, each with the
+/// holder collision that made it go, and none is left in it.
+#[test]
+fn the_verification_takes_out_operations_whose_holder_hits_the_stock() {
+    let k = short_stickout(40.0);
+    let mut s = planned("tall_rib", k.clone());
+    s.run_stage(thinplan_plan::Stage::Verify).expect("verifies");
+    let v = s.plan.verification.as_ref().unwrap();
+    let holder = v
+        .removed
+        .iter()
+        .filter(|r| r.problem.kind == thinplan_plan::ProblemKind::HolderCollision)
+        .count();
+    assert!(holder > 0, "{:?}", v.removed);
+    assert_ne!(v.verdict, thinplan_plan::Verdict::Safe);
+    let left = check(&s.plan, &k, &s.brep);
+    assert!(
+        !left.collisions.iter().any(|c| c.what == ToolPart::Holder),
+        "holder collisions left in the program"
+    );
 }
 
 /// The built-in knowledge with the Ø20's stickout shortened, so that its

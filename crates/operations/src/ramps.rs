@@ -334,8 +334,16 @@ mod tests {
                 feed: 1000.0,
                 region: Region3::Rest,
             };
-            let moves =
-                ramp_entry(to + DVec3::Z * 22.0, to, 13.0, &next, 3.0, 48.0, &view).unwrap();
+            let moves = ramp_entry(
+                to + DVec3::Z * 22.0,
+                to,
+                13.0,
+                std::slice::from_ref(&next),
+                3.0,
+                48.0,
+                &view,
+            )
+            .unwrap();
             assert_eq!(moves.last().unwrap().to, to);
             for m in moves.iter().filter(|m| m.region != Region3::Rapid) {
                 let r = (m.to - c).truncate().length();
