@@ -564,12 +564,31 @@ fn assert_machined(names: &[&str]) {
         let d = tmp(&format!("gcode-{name}"));
         let (_, plan, v) = plan_and_simulate(name, &d, "p", &[]);
         assert!(v["removed_volume_mm3"].as_f64().unwrap() > 0.0);
-        // Where a tool reaches the part, the stock is the part.
-        assert_eq!(
-            v["leftover_missed"]["cells"], 0,
-            "{name}: leftover a tool reaches the part under: {}",
-            v["leftover_missed"]
-        );
+        // Where a tool reaches the part, the stock is the part — unless the
+        // verification took operations out, and then it says so.
+        let p: Value = serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
+        let removed = p["verification"]["removed"].as_array().map_or(0, Vec::len);
+        if removed == 0 {
+            assert_eq!(
+                v["leftover_missed"]["cells"], 0,
+                "{name}: leftover a tool reaches the part under: {}",
+                v["leftover_missed"]
+            );
+        } else {
+            assert_eq!(p["verification"]["verdict"], "incomplete", "{name}");
+            let missed = v["leftover_missed"]["volume_mm3"].as_f64().unwrap();
+            let reported: f64 = p["verification"]["left"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|l| l["reason"] == "missed")
+                .map(|l| l["volume_mm3"].as_f64().unwrap())
+                .sum();
+            assert!(
+                missed <= 1.0 || reported > 0.5 * missed,
+                "{name}: {missed:.1} mm³ missed, the verification reports {reported:.1}"
+            );
+        }
         let above = v["leftover_above_reach"]["volume_mm3"].as_f64().unwrap();
         let (allowed, why) = ABOVE_REACH_ALLOWANCE
             .iter()
@@ -592,7 +611,6 @@ fn assert_machined(names: &[&str]) {
             "{name}: {:.1} % of the feed length cuts air",
             air * 100.0
         );
-        let p: Value = serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
         let mut reported = 0.0;
         for r in p["refusals"].as_array().unwrap() {
             let rule = r["rule"].as_str().unwrap();
@@ -1016,11 +1034,18 @@ fn links_on_the_in_process_stock_run_lower_and_never_into_stock() {
     );
     println!("rapids {rh:.0} → {rl:.0} mm, feed {fh:.0} → {fl:.0} mm");
     assert!(rl < 0.9 * rh, "rapids {rh} → {rl}");
-    // Descents may start lower, so the fed part of them can only shrink.
-    assert!(fl <= fh + 1e-6, "feed {fh} → {fl}");
+    // Descents may start lower, so the fed part of them can only shrink —
+    // but where the stock map finds material under a straight descent it
+    // becomes a ramp entry, which feeds longer.
+    let (stock, top) = (&plans[0], &plans[1]);
+    let ramped: f64 = stock
+        .operations
+        .iter()
+        .filter_map(|o| o.provenance.values.get("entries_ramped"))
+        .sum();
+    assert!(fl <= fh + 1e-6 || ramped > 0.0, "feed {fh} → {fl}");
     // Every link the post would have taken over its clearance height
     // between two operations of one tool is planned on the stock.
-    let (stock, top) = (&plans[0], &plans[1]);
     assert!(top.operations.iter().all(|o| o.link_z.is_none()));
     let planned = stock
         .operations

@@ -74,7 +74,17 @@ fn check_product_and_floor(f: &MachiningFeature, ops: &Operations, k: &Knowledge
 /// (b) coverage: at the final depth every region sample (0.2 mm grid) is
 /// within r of a cutting move at that depth.
 fn check_coverage(f: &MachiningFeature, ops: &Operations, k: &Knowledge) {
-    let z = f.shape.z_min;
+    // A through feature's final depth is below its floor (the breakthrough).
+    let z = if f.bottom_adjacency == Adjacency::Open {
+        ops.operations
+            .iter()
+            .flat_map(|op| walk(op, 0.02))
+            .filter(|(_, _, region)| is_cutting(*region))
+            .map(|(p, _, _)| p.z)
+            .fold(f.shape.z_min, f64::min)
+    } else {
+        f.shape.z_min
+    };
     let mut segs = Vec::new();
     let mut r = f64::INFINITY;
     for op in &ops.operations {
