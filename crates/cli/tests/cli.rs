@@ -507,8 +507,13 @@ const ABOVE_REACH_ALLOWANCE: &[(&str, f64, &str)] = &[
 /// 0.38 (isogrid). Before rest lines kept to the feature's extent across
 /// them (a line whose disc only grazes the feature beyond an open edge):
 /// chamfered_rib 0.63, wall_holes 0.50, crossing_ribs 0.45, tall_rib 0.43,
-/// isogrid 0.42.
-const AIR_SHARE_MAX: f64 = 0.40;
+/// isogrid 0.42. Stage 8's ramp entries (a straight descent into stock
+/// becomes a ramp along the level, starting above the highest stock its
+/// map holds under the tool, and that map errs towards material) added air:
+/// flange_cutouts 0.37 → 0.41, isogrid up to 0.53 in the debug build, where
+/// the verification also takes out operations that plunge. A deliberate
+/// trade — no axial plunge into stock — to be won back by a finer map.
+const AIR_SHARE_MAX: f64 = 0.55;
 
 /// `plan builtin:NAME` to G-code in `d` (files `TAG.*`, `extra` arguments
 /// after the command's), replayed by the stock simulation: asserts the plan

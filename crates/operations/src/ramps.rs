@@ -21,7 +21,7 @@ pub(crate) const MAX_PASSES: usize = 400;
 pub(crate) const MIN_RUN: f64 = 0.5;
 
 /// Air above the stock where the ramp starts, mm.
-pub(crate) const RAMP_START_CLEARANCE: f64 = 0.5;
+pub(crate) const RAMP_START_CLEARANCE: f64 = 0.2;
 
 /// One piece of the path a ramp runs along: a straight line or an arc
 /// about an axis along up, from `from`, measured by its plan-view length.
