@@ -398,7 +398,7 @@ mod tests {
         let short = next(DVec3::new(0.1, 0.0, 3.0));
         assert!(ramp_entry(from, to, 13.0, &[short], 3.0, 50.0, &view).is_none());
         let long = next(DVec3::new(30.0, 0.0, 3.0));
-        assert!(ramp_entry(from, to, 2.0, &[long.clone()], 3.0, 50.0, &view).is_none());
+        assert!(ramp_entry(from, to, 2.0, std::slice::from_ref(&long), 3.0, 50.0, &view).is_none());
         // 22 mm at 0.01° over 30 mm: more passes than allowed.
         assert!(ramp_entry(from, to, 25.0, &[long], 0.01, 50.0, &view).is_none());
     }
