@@ -148,25 +148,17 @@ fn kind_of(w: &str) -> String {
     let mut last_hash = false;
     let mut chars = w.chars().peekable();
     while let Some(c) = chars.next() {
-        let id_prefix =
-            (c == 'M' || c == 'S' || c == 'O') && matches!(chars.peek(), Some('F') | Some('P'));
-        if c.is_ascii_digit()
-            || c == '.' && last_hash
-            || c == '-' && chars.peek().is_some_and(|d| d.is_ascii_digit())
-        {
+        let number = c.is_ascii_digit()
+            || (c == '.' && last_hash)
+            || (c == '-' && chars.peek().is_some_and(|d| d.is_ascii_digit()));
+        if number {
             if !last_hash {
                 out.push('#');
             }
-            last_hash = true;
-            continue;
-        }
-        if id_prefix {
+        } else {
             out.push(c);
-            last_hash = false;
-            continue;
         }
-        last_hash = false;
-        out.push(c);
+        last_hash = number;
     }
     out
 }
