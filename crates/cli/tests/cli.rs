@@ -515,8 +515,14 @@ const ABOVE_REACH_ALLOWANCE: &[(&str, f64, &str)] = &[
 /// trade — no axial plunge into stock — to be won back by a finer map.
 const AIR_SHARE_MAX: f64 = 0.55;
 
-/// `plan builtin:NAME` to G-code in `d` (files `TAG.*`, `extra` arguments
-/// after the command's), replayed by the stock simulation: asserts the plan
+/// The tool set the allowances above and the figures in this file's
+/// reasons were measured with (a Ø12 and a Ø20 with long stickouts). The
+/// default set (`alu_hsm`) is held to the independent checker on every
+/// sample by `tests/corpus.rs`, and to its verdict.
+const MEASURED_WITH: &str = "endmills_12_20";
+
+/// `plan builtin:NAME --tools MEASURED_WITH` to G-code in `d` (files
+/// `TAG.*`, `extra` arguments after the command's), replayed by the stock simulation: asserts the plan
 /// succeeded, no gouge and no rapid into stock; returns the plan's stdout,
 /// the plan file and the simulation's JSON.
 fn plan_and_simulate(name: &str, d: &Path, tag: &str, extra: &[&str]) -> (Vec<u8>, PathBuf, Value) {
@@ -532,6 +538,7 @@ fn plan_and_simulate(name: &str, d: &Path, tag: &str, extra: &[&str]) -> (Vec<u8
         .arg(&ngc)
         .arg("--tool-table")
         .arg(&tbl)
+        .args(["--tools", MEASURED_WITH])
         .args(extra)
         .output()
         .unwrap();

@@ -334,7 +334,10 @@ fn corpus_programs_are_safe_or_not_written() {
         })
         .collect();
     let planned = plan_all(&jobs, &out);
-    let lib = repo().join("knowledge/tools/endmills_12_20.ron");
+    let lib = repo().join(format!(
+        "knowledge/tools/{}.ron",
+        thinplan_knowledge::DEFAULT_TOOL_SET
+    ));
     let checked = check(&py, &out, &corpus, &lib);
     let failures = judge(&planned, &checked);
     eprintln!("corpus: {}", summary(&planned));
@@ -359,7 +362,10 @@ fn bundled_samples_are_safe_or_not_written() {
         jobs.push((format!("builtin:{n}"), n.to_string()));
     }
     let planned = plan_all(&jobs, &out);
-    let lib = repo().join("knowledge/tools/endmills_12_20.ron");
+    let lib = repo().join(format!(
+        "knowledge/tools/{}.ron",
+        thinplan_knowledge::DEFAULT_TOOL_SET
+    ));
     let checked = check(&py, &out, &out, &lib);
     let failures = judge(&planned, &checked);
     eprintln!("samples: {}", summary(&planned));

@@ -141,7 +141,7 @@ pub const SIZING_FILE: &str = "sizing.ron";
 
 /// Default resources when a set-up names none.
 pub const DEFAULT_MACHINE: &str = "hsm_5axis";
-pub const DEFAULT_TOOL_SET: &str = "endmills_12_20";
+pub const DEFAULT_TOOL_SET: &str = "alu_hsm";
 pub const DEFAULT_MATERIAL: &str = "al7075";
 pub const DEFAULT_POST: &str = "linuxcnc";
 

@@ -53,6 +53,10 @@ pub struct MethodKnowledge {
     /// plus the tool's corner radius, so the corner leaves no ring at the
     /// foot of the opening.
     pub breakthrough: f64,
+    /// A tool may cut down to `stickout − holder_clearance` (mm) below the
+    /// top of the stock, never deeper: its holder's face stays this far
+    /// above the highest stock it could meet (tool reach, issue 22).
+    pub holder_clearance: f64,
     /// The methods, tried in order: the first whose `applies` matches a
     /// feature is used.
     pub methods: Vec<Method>,
@@ -205,6 +209,18 @@ pub struct ToolRule {
     /// the smallest corner, so the boundary pass has no sharp corners).
     /// `None`: corners are not considered.
     pub corner_ratio: Option<f64>,
+    /// The tool kinds the method may use (absent: flat and bull-nose end
+    /// mills; a ball end mill leaves scallops on the flat floors and the
+    /// walls' feet these methods cut).
+    #[serde(default = "level_cutters")]
+    pub kinds: Vec<crate::ToolKind>,
+}
+
+fn level_cutters() -> Vec<crate::ToolKind> {
+    vec![
+        crate::ToolKind::FlatEndMill,
+        crate::ToolKind::BullNoseEndMill,
+    ]
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -372,6 +388,14 @@ impl MethodKnowledge {
             "breakthrough",
             self.breakthrough,
             Range::closed(0.0, 10.0),
+            " mm",
+        );
+        c.range(
+            at!["holder_clearance"],
+            "",
+            "holder_clearance",
+            self.holder_clearance,
+            Range::closed(0.0, 100.0),
             " mm",
         );
         c.range(
@@ -614,6 +638,12 @@ impl MethodKnowledge {
                     r,
                     Range::above(0.0, 1.0),
                     "",
+                );
+            }
+            if m.tool.kinds.is_empty() {
+                c.push(
+                    at!["methods", i, "tool", "kinds"],
+                    format!("{p}tool.kinds is empty: the method could use no tool"),
                 );
             }
             c.range(

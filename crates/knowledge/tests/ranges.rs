@@ -269,9 +269,9 @@ fn a_neck_must_be_thinner_than_the_cutter_and_end_below_the_holder() {
 }
 
 #[test]
-fn the_aluminium_set_loads_without_changing_the_default() {
+fn the_aluminium_set_is_the_default() {
     let k = Knowledge::load_dir(&repo_knowledge()).unwrap();
-    assert_eq!(DEFAULT_TOOL_SET, "endmills_12_20");
+    assert_eq!(DEFAULT_TOOL_SET, "alu_hsm");
     let set = k.tool_set("alu_hsm").unwrap();
     let mut ds: Vec<f64> = set
         .tools

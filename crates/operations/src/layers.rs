@@ -78,6 +78,31 @@ pub(crate) struct Made {
 /// How a refusal for lack of any tool that fits starts (stage 7 reports it
 /// as unreachable material, rule `operations.unreachable`).
 pub(crate) const NO_TOOL_FITS: &str = "unreachable: no tool of the set-up's tool set fits";
+/// The start of a refusal for material below every fitting tool's reach.
+pub(crate) const NO_TOOL_REACHES: &str = "unreachable: no tool of the set-up's tool set reaches";
+
+/// Whether a refusal leaves material no tool of the set can cut (not a
+/// planning failure).
+pub(crate) fn is_unreachable(reason: &str) -> bool {
+    reason.starts_with(NO_TOOL_FITS) || reason.starts_with(NO_TOOL_REACHES)
+}
+
+/// How far below the top of the stock `t` may cut: its stickout less the
+/// holder clearance, so its holder's face stays above the highest stock
+/// it could meet (the top of the stock bounds it everywhere).
+pub(crate) fn tool_reach(env: &Env, t: &Tool) -> f64 {
+    t.stickout - env.k.methods.holder_clearance
+}
+
+/// The depth of local height `z` of `f` below the top of the stock.
+pub(crate) fn depth_below_top(env: &Env, f: &MachiningFeature, z: f64) -> f64 {
+    let up_off = f
+        .shape
+        .frame
+        .origin
+        .dot(f.shape.frame.z.normalize_or_zero());
+    env.global_top - up_off - z
+}
 
 /// Sampling step (mm) for containment checks and polygons.
 const STEP: f64 = 0.25;
@@ -1812,9 +1837,9 @@ fn slope_values(prov: &mut Provenance, g: &Geometry) {
     }
 }
 
-fn plan_band_with(
+fn plan_band_with<'a>(
     f: &MachiningFeature,
-    env: &Env,
+    env: &Env<'a>,
     free: Option<&crate::free::Shapes>,
     removed: Option<&crate::free::Shapes>,
     slopes: Slopes,
@@ -1837,10 +1862,23 @@ fn plan_band_with(
         .ok_or_else(|| format!("no method applies (sides {sides:?})"))?;
     let mut warnings = Vec::new();
     let mut unreachable: Vec<String> = Vec::new();
+    let mut reach_left: Vec<(String, f64)> = Vec::new();
     let mut corners_unreached = false;
 
-    // Tool: by the method's rule, smaller than the smallest product corner.
-    let mut cands: Vec<&Tool> = env.tools.tools.iter().collect();
+    // Tool: by the method's rule, of a kind it allows, smaller than the
+    // smallest product corner, and reaching the feature's floor.
+    let mut cands: Vec<&'a Tool> = env
+        .tools
+        .tools
+        .iter()
+        .filter(|t| m.tool.kinds.contains(&t.kind))
+        .collect();
+    if cands.is_empty() {
+        return Err(format!(
+            "{NO_TOOL_FITS} (none of the kinds {:?} the method allows)",
+            m.tool.kinds
+        ));
+    }
     cands.sort_by(|a, b| {
         a.diameter
             .total_cmp(&b.diameter)
@@ -1879,13 +1917,21 @@ fn plan_band_with(
             cands = small;
         }
     }
-    let (tool, g) = cands
+    let need = depth_below_top(env, f, f.shape.z_min);
+    let (reaching, short): (Vec<&Tool>, Vec<&Tool>) = cands
         .iter()
-        .find_map(|t| geometry(f, m, t, free, removed, slopes).map(|g| (*t, g)))
+        .copied()
+        .partition(|t| tool_reach(env, t) >= need - 1e-9);
+    let fits = |t: &'a Tool| geometry(f, m, t, free, removed, slopes).map(|g| (t, g));
+    let mut short = short;
+    // Deepest reach first: the most of the feature is cut.
+    short.sort_by(|a, b| tool_reach(env, b).total_cmp(&tool_reach(env, a)));
+    let (tool, g) = reaching
+        .iter()
+        .find_map(|t| fits(t))
+        .or_else(|| short.iter().find_map(|t| fits(t)))
         .ok_or_else(|| {
-            let smallest = env
-                .tools
-                .tools
+            let smallest = cands
                 .iter()
                 .map(|t| t.diameter)
                 .fold(f64::INFINITY, f64::min);
@@ -1894,6 +1940,38 @@ fn plan_band_with(
                  from the product and the free space)"
             )
         })?;
+    // A tool that fits but does not reach the floor cuts the levels it
+    // reaches; below them the feature is refused, naming the tool it needs.
+    let reach = tool_reach(env, tool);
+    let clamped;
+    let mut bottom_product = bottom_product;
+    let f = if reach < need - 1e-9 {
+        let z_reach = f.shape.z_min + (need - reach);
+        let why = format!(
+            "{NO_TOOL_REACHES}: {} below {z_reach:.3}, {need:.1} mm below the top of the stock: \
+             the tool of the set that fits and reaches deepest, {} (D {:.3} mm), reaches \
+             {reach:.1} mm; needs D <= {:.3} mm with {need:.1} mm reach (stickout {:.1} mm)",
+            f.id,
+            tool.id,
+            tool.diameter,
+            tool.diameter,
+            need + env.k.methods.holder_clearance
+        );
+        if z_reach >= f.shape.z_max - 1e-6 {
+            return Err(why);
+        }
+        let area = region_area(f);
+        let mut c = f.clone();
+        c.shape.z_min = z_reach;
+        c.bottom_adjacency = Adjacency::Feature;
+        warnings.push(format!("{}: {why}", f.id));
+        reach_left.push((why, area * (z_reach - f.shape.z_min)));
+        bottom_product = false;
+        clamped = c;
+        &clamped
+    } else {
+        f
+    };
     // The corners' volume: the region less what the tool's disc sweeps,
     // over the feature's depth.
     let depth = f.shape.z_max - f.shape.z_min;
@@ -1907,6 +1985,7 @@ fn plan_band_with(
             };
             (r, v)
         })
+        .chain(reach_left)
         .collect();
     let d = tool.diameter;
     let (rpm, feed_rough, feed_finish) = conditions(env, tool);
@@ -2584,11 +2663,13 @@ enum Rest<'k> {
 fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     let mk = &c.env.k.methods;
     let main = c.tool;
+    let need = depth_below_top(c.env, c.f, c.z_min);
     let mut cands: Vec<&Tool> = c
         .env
         .tools
         .tools
         .iter()
+        .filter(|t| c.m.tool.kinds.contains(&t.kind) && tool_reach(c.env, t) >= need - 1e-9)
         .filter(|t| match rest {
             Rest::Floor(rp) => {
                 t.corner_radius <= main.corner_radius - rp.min_corner_gain + 1e-12

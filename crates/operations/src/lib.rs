@@ -280,9 +280,7 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
             // A path the safety net refused with one tool may pass with a
             // smaller one: retry without the largest tools, one at a time.
             let mut fewer = tools.clone();
-            while matches!(&m, Err(e) if !e.starts_with(layers::NO_TOOL_FITS))
-                && fewer.tools.len() > 1
-            {
+            while matches!(&m, Err(e) if !layers::is_unreachable(e)) && fewer.tools.len() > 1 {
                 let largest = fewer
                     .tools
                     .iter()
@@ -321,7 +319,7 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
                 // Below material no tool reaches, the same holds.
                 let unreachable = match (&skipped.get(&a), &made[a]) {
                     (Some((_, u)), _) => *u,
-                    (None, Some(Err(e))) => e.starts_with(layers::NO_TOOL_FITS),
+                    (None, Some(Err(e))) => layers::is_unreachable(e),
                     _ => false,
                 };
                 let reason = if unreachable {
@@ -384,7 +382,7 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
             Err(reason) => {
                 out.warnings.push(format!("{}: {reason}", f.id));
                 // No tool fits at all: unreachable material, not a failure.
-                let unreachable = reason.starts_with(layers::NO_TOOL_FITS);
+                let unreachable = layers::is_unreachable(&reason);
                 let rule = if unreachable {
                     "operations.unreachable"
                 } else {

@@ -28,6 +28,7 @@ use thinplan_plan::{Operation, OperationId, PathMove, Plan, Region3};
 
 use crate::path::{move_points, LMove};
 use crate::{length_and_time, resources, Kind, OperationsError};
+use thinplan_feeds::MachineLimits;
 
 /// Side of a height-map cell, mm. Any size is safe (cells err towards
 /// material); finer cells let links run lower beside walls.
@@ -547,32 +548,130 @@ pub fn lower_links(
     }
     for (oi, c) in changed.iter().enumerate() {
         if *c {
-            let op = &plan.operations[oi];
-            let fi = features[&op.feature];
-            let local = Local::new(&plan.machining_features[fi]);
-            let lm: Vec<(LMove, f64)> = op
-                .moves
-                .iter()
-                .map(|m| {
-                    let cap = if m.region == Region3::Rapid {
-                        rapid_cap
-                    } else {
-                        m.feed / 60.0
-                    };
-                    (local.lmove(m), cap)
-                })
-                .collect();
-            let (length, time) = length_and_time(
-                local.point(op.start),
-                lm.iter().map(|(m, c)| (m, *c)),
-                &limits,
-            );
-            let op = &mut plan.operations[oi];
-            op.provenance.values.insert("length_mm".into(), length);
-            op.provenance.values.insert("time_s".into(), time);
+            retime(plan, oi, rapid_cap, &limits);
         }
     }
     Ok(report)
+}
+
+/// Records the length and time of operation `oi` as its moves now stand.
+fn retime(plan: &mut Plan, oi: usize, rapid_cap: f64, limits: &MachineLimits) {
+    let op = &plan.operations[oi];
+    let Some(f) = plan.machining_features.iter().find(|f| f.id == op.feature) else {
+        return;
+    };
+    let local = Local::new(f);
+    let lm: Vec<(LMove, f64)> = op
+        .moves
+        .iter()
+        .map(|m| {
+            let cap = if m.region == Region3::Rapid {
+                rapid_cap
+            } else {
+                m.feed / 60.0
+            };
+            (local.lmove(m), cap)
+        })
+        .collect();
+    let (length, time) = length_and_time(
+        local.point(op.start),
+        lm.iter().map(|(m, c)| (m, *c)),
+        limits,
+    );
+    let op = &mut plan.operations[oi];
+    op.provenance.values.insert("length_mm".into(), length);
+    op.provenance.values.insert("time_s".into(), time);
+}
+
+/// Stage 9's repair of an operation whose replay found a feed plunge into
+/// stock that stage 8's map took for air (it is coarser than the replay):
+/// every straight feed descent of operation `id` becomes a ramp from where
+/// the descent starts, at its method's entry angle (the shallowest any
+/// method allows for one not in the knowledge), and the operation is
+/// retimed. Records `entries_ramped_on_replay`; returns how many descents
+/// it ramped (0: none could be, the operation is as it was).
+pub fn ramp_every_descent(
+    plan: &mut Plan,
+    k: &Knowledge,
+    id: OperationId,
+) -> Result<usize, OperationsError> {
+    let (_, tools, limits) = resources(plan, k)?;
+    let rapid_cap = limits.v_max.iter().copied().fold(0.0, f64::max);
+    let view = View::new(plan.setup.up);
+    let Some(oi) = plan.operations.iter().position(|o| o.id == id) else {
+        return Ok(0);
+    };
+    let op = &plan.operations[oi];
+    let Some(tool) = tools.tools.iter().find(|t| t.id == op.tool) else {
+        return Ok(0);
+    };
+    let angle = k
+        .methods
+        .methods
+        .iter()
+        .find(|m| m.id == op.method)
+        .map(|m| m.entry.angle_deg())
+        .unwrap_or_else(|| {
+            k.methods
+                .methods
+                .iter()
+                .map(|m| m.entry.angle_deg())
+                .fold(45.0, f64::min)
+        });
+    let mut out = Vec::with_capacity(op.moves.len());
+    let mut pos = op.start;
+    let mut ramped = 0;
+    let mut i = 0;
+    let down = |from: DVec3, m: &PathMove| {
+        m.arc.is_none() && is_vertical(from, m.to, &view) && view.z(m.to) < view.z(from) - 1e-6
+    };
+    while i < op.moves.len() {
+        let m = &op.moves[i];
+        // Fed (G1) straight descents, whatever region they belong to.
+        if m.feed == 0.0 || !down(pos, m) {
+            out.push(m.clone());
+            pos = m.to;
+            i += 1;
+            continue;
+        }
+        // The fed descent and the straight descents right after it (the
+        // descent to the top of a ramp stage 8 planned) are one descent.
+        let mut j = i + 1;
+        while j < op.moves.len() && down(op.moves[j - 1].to, &op.moves[j]) {
+            j += 1;
+        }
+        let to = op.moves[j - 1].to;
+        let ramp = crate::ramps::ramp_entry(
+            pos,
+            to,
+            view.z(pos),
+            &op.moves[j..],
+            angle,
+            RAMP_RUN_DIAMETERS * tool.diameter,
+            &view,
+        );
+        match ramp {
+            Some(r) => {
+                out.extend(r);
+                ramped += 1;
+                i = j;
+            }
+            None => {
+                out.push(m.clone());
+                i += 1;
+            }
+        }
+        pos = out.last().map_or(pos, |m| m.to);
+    }
+    if ramped > 0 {
+        let op = &mut plan.operations[oi];
+        op.moves = out;
+        op.provenance
+            .values
+            .insert("entries_ramped_on_replay".into(), ramped as f64);
+        retime(plan, oi, rapid_cap, &limits);
+    }
+    Ok(ramped)
 }
 
 /// One operation's moves from `start` with each rapid up–across–down link

@@ -578,6 +578,11 @@ impl Plan {
                     self.operation_order = v.planned_order;
                     self.operations
                         .extend(v.removed.into_iter().map(|r| r.removed));
+                    for r in v.replanned {
+                        if let Some(o) = self.operations.iter_mut().find(|o| o.id == r.operation) {
+                            *o = r.planned;
+                        }
+                    }
                     self.operations.sort_by_key(|o| o.id);
                 }
             }

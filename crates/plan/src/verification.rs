@@ -125,6 +125,19 @@ pub struct RemovedOperation {
     pub removed: Operation,
 }
 
+/// An operation the verification planned again (its entries ramped where
+/// the replay found a plunge), with the operation as stage 8 left it, so
+/// that verifying again starts from that.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReplannedOperation {
+    pub operation: OperationId,
+    /// The problem that made it be planned again.
+    pub problem: Problem,
+    pub round: u32,
+    pub planned: Operation,
+}
+
 /// Stage 9's result.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -136,6 +149,10 @@ pub struct Verification {
     pub left: Vec<LeftMaterial>,
     /// Operations removed from the order because they made a problem.
     pub removed: Vec<RemovedOperation>,
+    /// Operations planned again (they stay in the program unless also in
+    /// `removed`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub replanned: Vec<ReplannedOperation>,
     /// The order stage 8 gave, before any removal (restored when the
     /// verification is run again).
     pub planned_order: Vec<OperationId>,

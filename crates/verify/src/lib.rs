@@ -16,7 +16,7 @@ use thinplan_brep::Brep;
 use thinplan_knowledge::{Knowledge, VerificationKnowledge};
 use thinplan_plan::{
     LeftMaterial, LeftReason, OperationId, Plan, Problem, ProblemKind, Provenance,
-    ProvenanceSource, Refusal, RemovedOperation, Stage, Verdict, Verification,
+    ProvenanceSource, Refusal, RemovedOperation, ReplannedOperation, Stage, Verdict, Verification,
 };
 use thinplan_stocksim::{
     parse, parse_tool_table, simulate, CellClass, Crash, CrashKind, DefectSummary, MoveChecks,
@@ -57,6 +57,7 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         )));
     }
     let mut removed: Vec<RemovedOperation> = Vec::new();
+    let mut replanned: Vec<ReplannedOperation> = Vec::new();
     let mut rounds = 0;
     let replay = loop {
         rounds += 1;
@@ -70,6 +71,23 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         }
         for (op, problem) in culprits {
             let kind = problem.kind;
+            // A plunge stage 8 took for air: planned again once, every
+            // descent a ramp from where it starts; removed if it fails again.
+            if kind == ProblemKind::PlungeIntoStock && !replanned.iter().any(|r| r.operation == op)
+            {
+                let before = plan.operations.iter().find(|o| o.id == op).cloned();
+                let ramped = thinplan_operations::links::ramp_every_descent(plan, k, op)
+                    .map_err(|e| VerifyError(format!("re-planning {op}'s entries: {e}")))?;
+                if let (true, Some(planned)) = (ramped > 0, before) {
+                    replanned.push(ReplannedOperation {
+                        operation: op,
+                        problem,
+                        round: rounds,
+                        planned,
+                    });
+                    continue;
+                }
+            }
             let Some(operation) = remove_operation(plan, op) else {
                 continue;
             };
@@ -102,6 +120,7 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         problems: replay.problems,
         left: replay.left,
         removed,
+        replanned,
         planned_order,
         rounds,
         cell_mm: cfg.cell,

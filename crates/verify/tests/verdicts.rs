@@ -11,7 +11,15 @@ use thinplan_pipeline::{load_knowledge, make_setup, Session, SetupRequest};
 use thinplan_plan::{ProblemKind, Stage, Verdict};
 
 fn to_order(name: &str, k: Knowledge) -> Session {
-    let setup = make_setup(&SetupRequest::default(), &k).expect("default set-up");
+    to_order_with(name, k, None)
+}
+
+fn to_order_with(name: &str, k: Knowledge, tool_set: Option<&str>) -> Session {
+    let req = SetupRequest {
+        tool_set: tool_set.map(str::to_string),
+        ..SetupRequest::default()
+    };
+    let setup = make_setup(&req, &k).expect("set-up");
     let mut s = Session::open(&format!("builtin:{name}"), setup, k).expect("opens");
     s.run_to(Stage::Order, &AtomicBool::new(false), |_| {})
         .expect("plans through stage 8");
@@ -76,16 +84,68 @@ fn flutes_shorter_than_the_cut_make_shank_contact_and_the_plan_incomplete() {
     assert_ne!(v.verdict, Verdict::Safe);
 }
 
-/// The unchanged plan verifies with nothing removed, in one replay, and
+/// The unchanged plan, with the Ø12/Ø20 set whose long stickouts reach the
+/// web from the top, verifies with nothing removed, in one replay, and
 /// verifying again gives the same bytes.
 #[test]
 fn the_bundled_tall_rib_verifies_clean_and_deterministically() {
-    let mut s = to_order("tall_rib", load_knowledge(None).unwrap());
+    let mut s = to_order_with(
+        "tall_rib",
+        load_knowledge(None).unwrap(),
+        Some("endmills_12_20"),
+    );
     s.run_stage(Stage::Verify).expect("verifies");
     let first = serde_json::to_vec(&s.plan).unwrap();
     let v = s.plan.verification.as_ref().unwrap();
     assert!(v.removed.is_empty() && v.problems.is_empty(), "{v:?}");
+    assert!(v.replanned.is_empty());
     assert_eq!(v.rounds, 1);
+    s.run_stage(Stage::Verify).expect("verifies again");
+    assert_eq!(first, serde_json::to_vec(&s.plan).unwrap());
+}
+
+/// With the default set, the long-reach Ø12 finishes the rib's web; the
+/// replay finds feed descents where stage 8's coarser map saw air beside a
+/// standing column. Those operations are planned again, every descent a
+/// ramp from where it starts: nothing is removed, no plunge is left, the
+/// plan is safe. Verifying again starts from stage 8's operations (the
+/// replanned ones are restored first) and gives the same bytes.
+#[test]
+fn plunges_the_replay_finds_are_planned_again_as_ramps() {
+    let mut s = to_order("tall_rib", load_knowledge(None).unwrap());
+    let planned = s.plan.operations.clone();
+    s.run_stage(Stage::Verify).expect("verifies");
+    let first = serde_json::to_vec(&s.plan).unwrap();
+    let v = s.plan.verification.as_ref().unwrap();
+    assert!(
+        !v.replanned.is_empty(),
+        "nothing to replan: the case no longer tests it"
+    );
+    assert!(v.removed.is_empty() && v.problems.is_empty(), "{v:?}");
+    assert_eq!(v.verdict, Verdict::Safe);
+    for r in &v.replanned {
+        assert_eq!(r.problem.kind, ProblemKind::PlungeIntoStock);
+        assert_eq!(
+            Some(&r.planned),
+            planned.iter().find(|o| o.id == r.operation)
+        );
+        let now = s
+            .plan
+            .operations
+            .iter()
+            .find(|o| o.id == r.operation)
+            .unwrap();
+        assert!(now.provenance.values["entries_ramped_on_replay"] >= 1.0);
+        // No straight fed descent is left in it.
+        let mut pos = now.start;
+        for m in &now.moves {
+            let straight_down = m.arc.is_none()
+                && (m.to.truncate() - pos.truncate()).length() < 1e-9
+                && m.to.z < pos.z - 1e-6;
+            assert!(!(straight_down && m.feed > 0.0), "{pos} → {}", m.to);
+            pos = m.to;
+        }
+    }
     s.run_stage(Stage::Verify).expect("verifies again");
     assert_eq!(first, serde_json::to_vec(&s.plan).unwrap());
 }
