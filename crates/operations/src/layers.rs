@@ -1906,9 +1906,15 @@ fn plan_band_with<'a>(
                  the smallest that fits is used and material stays in those corners",
                 f.id
             ));
+            let needs = if rho > 0.0 {
+                format!("; needs D <= {:.3} mm", 2.0 * ratio * rho)
+            } else {
+                "; a sharp corner: no end mill reaches it".into()
+            };
             unreachable.push(format!(
                 "unreachable: product corners of {} tighter than any tool (smallest corner \
-                 radius {rho:.3} mm, smallest tool radius {:.3} mm): the material in them stays",
+                 radius {rho:.3} mm, smallest tool radius {:.3} mm): the material in them \
+                 stays{needs}",
                 f.id,
                 cands[0].diameter / 2.0
             ));
