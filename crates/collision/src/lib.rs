@@ -43,7 +43,8 @@ pub const SLOPED_SLAB: f64 = 0.5;
 /// Which part of the tool assembly hits the stock.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum ToolPart {
-    /// The shank: from the flute length up to the stickout.
+    /// The shank (and a long-reach tool's neck): from the flute length up
+    /// to the stickout.
     Shank,
     /// The holder: from the stickout up, `holder_length` tall.
     Holder,
@@ -558,24 +559,24 @@ pub fn feature_body(f: &MachiningFeature, frame: &Frame) -> Result<Body, String>
         .ok_or_else(|| format!("{}: empty shape; not checked", f.id))
 }
 
-/// The tool's cylinders above the tip: (part, radius, from, to) along up.
+/// The tool's cylinders above the flutes: (part, radius, from, to) along
+/// up, from [`Tool::radius_profile`]: a long-reach tool's neck up to its
+/// reach, then the shank up to the stickout (both [`ToolPart::Shank`]),
+/// then the holder.
 fn cylinders(t: &Tool) -> Vec<(ToolPart, f64, f64, f64)> {
     let mut c = Vec::new();
-    if t.stickout > t.flute_length && t.shank_diameter > 0.0 {
-        c.push((
-            ToolPart::Shank,
-            0.5 * t.shank_diameter,
-            t.flute_length,
-            t.stickout,
-        ));
-    }
-    if t.holder_diameter > 0.0 && t.holder_length > 0.0 {
-        c.push((
-            ToolPart::Holder,
-            0.5 * t.holder_diameter,
-            t.stickout,
-            t.stickout + t.holder_length,
-        ));
+    let mut from = 0.0;
+    for (k, (top, r)) in t.radius_profile().into_iter().enumerate() {
+        let part = if top > t.stickout + 1e-9 {
+            ToolPart::Holder
+        } else {
+            ToolPart::Shank
+        };
+        // The first step is the cutter: it cuts, it does not collide.
+        if k > 0 && r > 0.0 && top > from {
+            c.push((part, r, from, top));
+        }
+        from = top;
     }
     c
 }

@@ -7,7 +7,18 @@ use thinplan_plan::{
 };
 
 fn planned(name: &str, k: Knowledge) -> Session {
-    let setup = make_setup(&SetupRequest::default(), &k).expect("default set-up");
+    planned_with(name, k, None)
+}
+
+/// The short-stickout cases are about the Ø12/Ø20 set's em20 (holder Ø50).
+const SET: Option<&str> = Some("endmills_12_20");
+
+fn planned_with(name: &str, k: Knowledge, tool_set: Option<&str>) -> Session {
+    let req = SetupRequest {
+        tool_set: tool_set.map(str::to_string),
+        ..SetupRequest::default()
+    };
+    let setup = make_setup(&req, &k).expect("set-up");
     let mut s = Session::open(&format!("builtin:{name}"), setup, k).expect("opens");
     // Stage 8's program as it stands: the verification would take out the
     // operations these tests look for.
@@ -20,13 +31,17 @@ fn planned(name: &str, k: Knowledge) -> Session {
     s
 }
 
-/// The same short stickout through stage 9: the operations whose holder
-/// comes down on the stock are taken out of the program, each with the
-/// holder collision that made it go, and none is left in it.
+/// Paths planned for the em20 as the knowledge gives it, verified with its
+/// stickout shortened (a tool shrunk in deeper than the knowledge says):
+/// the operations whose holder comes down on the stock are taken out of
+/// the program, each with the holder collision that made it go, and none
+/// is left in it. (Planned with the short stickout, the em20 is not chosen
+/// for the levels it does not reach.)
 #[test]
 fn the_verification_takes_out_operations_whose_holder_hits_the_stock() {
     let k = short_stickout(40.0);
-    let mut s = planned("tall_rib", k.clone());
+    let mut s = planned_with("tall_rib", load_knowledge(None).unwrap(), SET);
+    s.knowledge = k.clone();
     s.run_stage(thinplan_plan::Stage::Verify).expect("verifies");
     let v = s.plan.verification.as_ref().unwrap();
     let holder = v
@@ -73,7 +88,7 @@ fn mv(to: [f64; 3], region: Region3) -> PathMove {
 #[test]
 fn a_short_stickout_brings_the_holder_onto_the_rib_of_a_handmade_path() {
     let k = short_stickout(40.0);
-    let s = planned("tall_rib", k.clone());
+    let s = planned_with("tall_rib", k.clone(), SET);
     // The part only: one operation of our own beside the rib (y 19.5–20.5,
     // top at z 92), 11 mm from its face.
     let mut plan = Plan::new(s.plan.part.clone(), s.plan.setup.clone());
@@ -124,7 +139,9 @@ fn a_short_stickout_brings_the_holder_onto_the_rib_of_a_handmade_path() {
 fn a_short_stickout_is_found_in_the_planned_tall_rib() {
     let stickout = 40.0;
     let k = short_stickout(stickout);
-    let s = planned("tall_rib", k.clone());
+    // Planned for the em20 as the knowledge gives it, checked with the
+    // short stickout.
+    let s = planned_with("tall_rib", load_knowledge(None).unwrap(), SET);
     let c = check_holders(&s.plan, &k, &s.brep);
     // Independently: the first move in the order whose tip goes below the
     // rib's top less the stickout, with the em20, beside the rib or the

@@ -1534,24 +1534,33 @@ pub(crate) fn feature_operations(
             // the overhang used to reach).
             let mut walled = band.clone();
             walls_towards(&mut walled, &active);
-            // Kept only if it cuts everything the overhanging plan cut in
-            // this band (the band alone may find room yet reach less).
-            let lost = plan_band(&walled, env, Some(&clear), removed).and_then(|m| {
-                let lost = lost_area(&whole.ops, &m.ops, &band, r);
-                if lost > LOST_AREA {
-                    Err(format!("{lost:.1} mm² of it out of reach"))
-                } else {
-                    Ok(m)
-                }
-            });
-            match lost {
+            // Kept even where it reaches less than the overhanging plan in
+            // this band: a shank in standing material is a collision the
+            // verification would take the whole operation out for, while
+            // what the band leaves is beside features cut later (their
+            // passes, open towards this one, and stage 7's second pass).
+            match plan_band(&walled, env, Some(&clear), removed) {
                 Ok(mut m) => {
+                    let lost = lost_area(&whole.ops, &m.ops, &band, r);
+                    if lost > LOST_AREA {
+                        m.warnings.push(format!(
+                            "{}: levels {lo:.3}..{hi:.3} keep the shank out of {}: {lost:.1} mm² \
+                             the overhang would reach is left to the features cut after it",
+                            f.id,
+                            names.join(", ")
+                        ));
+                    }
                     for op in &mut m.ops {
                         op.provenance.note.push_str(&format!(
                             "; shank_clear_of={} (flute {flute:.3} mm, band {lo:.3}..{hi:.3})",
                             names.join(",")
                         ));
                         op.provenance.values.insert("shank_band_top_mm".into(), hi);
+                        if lost > LOST_AREA {
+                            op.provenance
+                                .values
+                                .insert("shank_band_lost_mm2".into(), lost);
+                        }
                     }
                     m
                 }
