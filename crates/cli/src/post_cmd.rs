@@ -204,6 +204,7 @@ mod tests {
             left: Vec::new(),
             removed: Vec::new(),
             replanned: Vec::new(),
+            planned_links: Default::default(),
             planned_order: Vec::new(),
             rounds: 1,
             cell_mm: 0.25,

@@ -578,9 +578,18 @@ impl Plan {
                     self.operation_order = v.planned_order;
                     self.operations
                         .extend(v.removed.into_iter().map(|r| r.removed));
-                    for r in v.replanned {
+                    // Last first: the first replan of an operation holds
+                    // it as stage 8 left it.
+                    for r in v.replanned.into_iter().rev() {
                         if let Some(o) = self.operations.iter_mut().find(|o| o.id == r.operation) {
                             *o = r.planned;
+                        }
+                    }
+                    // Last: an operation kept or replanned after its link
+                    // was sent over the top holds it without the link.
+                    for (id, z) in v.planned_links {
+                        if let Some(o) = self.operations.iter_mut().find(|o| o.id == id) {
+                            o.link_z = Some(z);
                         }
                     }
                     self.operations.sort_by_key(|o| o.id);

@@ -125,15 +125,27 @@ pub struct RemovedOperation {
     pub removed: Operation,
 }
 
-/// An operation the verification planned again (its entries ramped where
-/// the replay found a plunge), with the operation as stage 8 left it, so
-/// that verifying again starts from that.
+/// How the verification planned an operation again.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Replan {
+    /// A feed plunge: every straight fed descent became a ramp from where
+    /// it starts.
+    RampedEntries,
+    /// Its shank or holder met material that still stood: moved to the end
+    /// of the program, when every other operation has cut.
+    RunLast,
+}
+
+/// An operation the verification planned again, with the operation as
+/// stage 8 left it, so that verifying again starts from that.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ReplannedOperation {
     pub operation: OperationId,
     /// The problem that made it be planned again.
     pub problem: Problem,
+    pub how: Replan,
     pub round: u32,
     pub planned: Operation,
 }
@@ -153,6 +165,10 @@ pub struct Verification {
     /// `removed`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub replanned: Vec<ReplannedOperation>,
+    /// Links stage 8 lowered that the verification sent over the top (the
+    /// operation before them changed), restored when it is run again.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub planned_links: std::collections::BTreeMap<OperationId, f64>,
     /// The order stage 8 gave, before any removal (restored when the
     /// verification is run again).
     pub planned_order: Vec<OperationId>,

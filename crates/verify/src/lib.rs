@@ -16,7 +16,8 @@ use thinplan_brep::Brep;
 use thinplan_knowledge::{Knowledge, VerificationKnowledge};
 use thinplan_plan::{
     LeftMaterial, LeftReason, OperationId, Plan, Problem, ProblemKind, Provenance,
-    ProvenanceSource, Refusal, RemovedOperation, ReplannedOperation, Stage, Verdict, Verification,
+    ProvenanceSource, Refusal, RemovedOperation, Replan, ReplannedOperation, Stage, Verdict,
+    Verification,
 };
 use thinplan_stocksim::{
     parse, parse_tool_table, simulate, CellClass, Crash, CrashKind, DefectSummary, MoveChecks,
@@ -58,6 +59,7 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
     }
     let mut removed: Vec<RemovedOperation> = Vec::new();
     let mut replanned: Vec<ReplannedOperation> = Vec::new();
+    let mut links: BTreeMap<OperationId, f64> = BTreeMap::new();
     let mut rounds = 0;
     let replay = loop {
         rounds += 1;
@@ -69,12 +71,23 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         if culprits.is_empty() {
             break r; // problems no operation made: nothing to take out
         }
+        // In program order: operations sent to the end keep theirs.
+        let mut culprits: Vec<(OperationId, Problem)> = culprits.into_iter().collect();
+        let at = |op: &OperationId| plan.operation_order.iter().position(|o| o == op);
+        culprits.sort_by_key(|(op, _)| at(op));
         for (op, problem) in culprits {
             let kind = problem.kind;
             // A plunge stage 8 took for air: planned again once, every
             // descent a ramp from where it starts; removed if it fails again.
-            if kind == ProblemKind::PlungeIntoStock && !replanned.iter().any(|r| r.operation == op)
-            {
+            // Planning again needs a replay to judge it and, should it fail,
+            // one more to confirm its removal: not in the last two rounds.
+            let tried = |how| {
+                rounds + 2 > cfg.max_rounds
+                    || replanned
+                        .iter()
+                        .any(|r: &ReplannedOperation| r.operation == op && r.how == how)
+            };
+            if kind == ProblemKind::PlungeIntoStock && !tried(Replan::RampedEntries) {
                 let before = plan.operations.iter().find(|o| o.id == op).cloned();
                 let ramped = thinplan_operations::links::ramp_every_descent(plan, k, op)
                     .map_err(|e| VerifyError(format!("re-planning {op}'s entries: {e}")))?;
@@ -82,13 +95,35 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
                     replanned.push(ReplannedOperation {
                         operation: op,
                         problem,
+                        how: Replan::RampedEntries,
                         round: rounds,
                         planned,
                     });
                     continue;
                 }
             }
-            let Some(operation) = remove_operation(plan, op) else {
+            // Material that still stood (or a plunge no ramp fits): once,
+            // the operation runs last, when everything else has cut.
+            if matches!(
+                kind,
+                ProblemKind::ShankContact
+                    | ProblemKind::HolderCollision
+                    | ProblemKind::PlungeIntoStock
+            ) && !tried(Replan::RunLast)
+            {
+                let before = plan.operations.iter().find(|o| o.id == op).cloned();
+                if let (Some(planned), true) = (before, run_last(plan, op, &mut links)) {
+                    replanned.push(ReplannedOperation {
+                        operation: op,
+                        problem,
+                        how: Replan::RunLast,
+                        round: rounds,
+                        planned,
+                    });
+                    continue;
+                }
+            }
+            let Some(operation) = remove_operation(plan, op, &mut links) else {
                 continue;
             };
             removed.push(RemovedOperation {
@@ -121,6 +156,7 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         left: replay.left,
         removed,
         replanned,
+        planned_links: links,
         planned_order,
         rounds,
         cell_mm: cfg.cell,
@@ -180,19 +216,57 @@ fn culprits(problems: &[Problem]) -> BTreeMap<OperationId, Problem> {
     out
 }
 
-/// Takes `op` out of the program (order and operations); the operation
-/// after it no longer follows the one its link was planned from, so its
-/// link goes over the top.
-fn remove_operation(plan: &mut Plan, op: OperationId) -> Option<thinplan_plan::Operation> {
+/// Sends the link into operation `id` over the top (the operation before
+/// it changed), keeping the lowered height stage 8 planned in `links`.
+fn clear_link(plan: &mut Plan, id: OperationId, links: &mut BTreeMap<OperationId, f64>) {
+    if let Some(o) = plan.operations.iter_mut().find(|o| o.id == id) {
+        if let Some(z) = o.link_z.take() {
+            links.entry(id).or_insert(z);
+        }
+    }
+}
+
+/// Takes `op` out of the order; the operation after it no longer follows
+/// the one its link was planned from, so its link goes over the top.
+/// Returns where it stood.
+fn take_from_order(
+    plan: &mut Plan,
+    op: OperationId,
+    links: &mut BTreeMap<OperationId, f64>,
+) -> Option<usize> {
     let pos = plan.operation_order.iter().position(|o| *o == op)?;
     plan.operation_order.remove(pos);
     if let Some(next) = plan.operation_order.get(pos).copied() {
-        if let Some(o) = plan.operations.iter_mut().find(|o| o.id == next) {
-            o.link_z = None;
-        }
+        clear_link(plan, next, links);
     }
+    Some(pos)
+}
+
+/// Takes `op` out of the program (order and operations).
+fn remove_operation(
+    plan: &mut Plan,
+    op: OperationId,
+    links: &mut BTreeMap<OperationId, f64>,
+) -> Option<thinplan_plan::Operation> {
+    take_from_order(plan, op, links)?;
     let at = plan.operations.iter().position(|o| o.id == op)?;
     Some(plan.operations.remove(at))
+}
+
+/// Moves `op` to the end of the order, its link over the top; false when
+/// it is last already (or not in the order).
+fn run_last(plan: &mut Plan, op: OperationId, links: &mut BTreeMap<OperationId, f64>) -> bool {
+    if plan.operation_order.last() == Some(&op) {
+        return false;
+    }
+    if take_from_order(plan, op, links).is_none() {
+        return false;
+    }
+    plan.operation_order.push(op);
+    if let Some(o) = plan.operations.iter_mut().find(|o| o.id == op) {
+        o.link_z = None;
+    }
+    true
 }
 
 fn replay(
