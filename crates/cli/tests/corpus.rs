@@ -97,9 +97,15 @@ struct Planned {
 }
 
 fn plan(part: &str, name: &str, out: &Path) -> Planned {
+    plan_with(part, name, out, &[])
+}
+
+fn plan_with(part: &str, name: &str, out: &Path, extra: &[&std::ffi::OsStr]) -> Planned {
     let ngc = out.join(format!("{name}.ngc"));
     let o = Command::new(env!("CARGO_BIN_EXE_thinplan"))
-        .args(["plan", part, "--json", "--out"])
+        .args(["plan", part, "--json"])
+        .args(extra)
+        .arg("--out")
         .arg(out.join(format!("{name}.plan.json")))
         .arg("--gcode")
         .arg(&ngc)
@@ -370,4 +376,110 @@ fn bundled_samples_are_safe_or_not_written() {
     let failures = judge(&planned, &checked);
     eprintln!("samples: {}", summary(&planned));
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The repository's knowledge with one more tool set, `d20_only`: the Ø20
+/// of the aluminium set alone.
+fn knowledge_with_d20_only(d: &Path) -> PathBuf {
+    fn copy_dir(from: &Path, to: &Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for e in std::fs::read_dir(from).unwrap() {
+            let p = e.unwrap().path();
+            let target = to.join(p.file_name().unwrap());
+            if p.is_dir() {
+                copy_dir(&p, &target);
+            } else {
+                std::fs::copy(&p, &target).unwrap();
+            }
+        }
+    }
+    let k = d.join("knowledge");
+    copy_dir(&repo().join("knowledge"), &k);
+    std::fs::write(
+        k.join("tools/d20_only.ron"),
+        r#"(
+    id: "d20_only",
+    name: "A Ø20 end mill alone",
+    tools: [
+        (
+            id: "em20_r1",
+            kind: BullNoseEndMill,
+            diameter: 20.0,
+            corner_radius: 1.0,
+            flutes: 2,
+            flute_length: 38.0,
+            stickout: 56.0,
+            shank_diameter: 20.0,
+            holder_diameter: 33.0,
+            holder_length: 80.0,
+            max_slot_depth_ratio: 0.5,
+        ),
+    ],
+)
+"#,
+    )
+    .unwrap();
+    k
+}
+
+/// A case made to fail (issue 22): a frame whose pockets have R5.75–R7.5
+/// corners, planned with a Ø20 alone. The corners are left, refused naming
+/// the diameter that would reach them; the verdict is incomplete (exit 8),
+/// the program is written, and the independent checker finds it free of
+/// gouges, plunges, shank and holder contact.
+#[test]
+fn a_d20_alone_leaves_the_pocket_corners_and_names_the_tool_they_need() {
+    let py = python();
+    let corpus = corpus(&py);
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("corpus-d20");
+    let _ = std::fs::remove_dir_all(&d);
+    let out = d.join("plans");
+    std::fs::create_dir_all(&out).unwrap();
+    let k = knowledge_with_d20_only(&d);
+    let name = "pocket_frame_01";
+    let step = corpus.join(format!("{name}.step"));
+    let p = plan_with(
+        step.to_str().unwrap(),
+        name,
+        &out,
+        &[
+            "--knowledge".as_ref(),
+            k.as_os_str(),
+            "--tools".as_ref(),
+            "d20_only".as_ref(),
+        ],
+    );
+    assert_eq!(p.code, 8, "{}", p.report);
+    assert_eq!(p.verdict.as_deref(), Some("incomplete"));
+    assert!(p.program);
+    // Each corner refusal names the diameter that would reach it, or says
+    // it is sharp: stage 6 still sections the tessellation, so a fillet
+    // reaches stage 7 as chords whose junctions read as sharp corners.
+    let corners: Vec<&str> = p.report["refused"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|r| r["reason"].as_str())
+        .filter(|r| r.contains("tighter than any tool"))
+        .collect();
+    assert!(!corners.is_empty(), "{}", p.report["refused"]);
+    for r in &corners {
+        let needs = r.find("needs D <= ").and_then(|at| {
+            r[at + "needs D <= ".len()..]
+                .split(' ')
+                .next()?
+                .parse::<f64>()
+                .ok()
+        });
+        match needs {
+            // 0.95 × the corner radius, as a diameter: below the Ø20.
+            Some(n) => assert!(n > 5.0 && n < 20.0, "needs D <= {n}"),
+            None => assert!(r.contains("a sharp corner"), "{r}"),
+        }
+    }
+    std::os::unix::fs::symlink(&step, out.join(format!("{name}.step"))).unwrap();
+    let checked = check(&py, &out, &out, &k.join("tools/d20_only.ron"));
+    let r = checked.get(name).expect("checked");
+    let bad = unsafe_by_checker(r);
+    assert!(bad.is_empty(), "{bad:?}");
 }
