@@ -5,6 +5,9 @@ use std::process::Command;
 
 use serde_json::Value;
 
+mod common;
+use common::copy_dir;
+
 fn thinplan() -> Command {
     Command::new(env!("CARGO_BIN_EXE_thinplan"))
 }
@@ -205,19 +208,6 @@ fn knowledge_with(d: &Path, file: &str, from: &str, to: &str) -> PathBuf {
     assert!(text.contains(from), "{file} has no `{from}`");
     std::fs::write(&f, text.replace(from, to)).unwrap();
     k
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let p = e.unwrap().path();
-        let target = to.join(p.file_name().unwrap());
-        if p.is_dir() {
-            copy_dir(&p, &target);
-        } else {
-            std::fs::copy(&p, &target).unwrap();
-        }
-    }
 }
 
 #[test]

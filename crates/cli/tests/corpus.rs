@@ -22,6 +22,8 @@ use std::process::Command;
 
 use serde_json::Value;
 
+mod common;
+
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../..")
@@ -381,22 +383,10 @@ fn bundled_samples_are_safe_or_not_written() {
 /// The repository's knowledge with one more tool set, `d20_only`: the Ø20
 /// of the aluminium set alone.
 fn knowledge_with_d20_only(d: &Path) -> PathBuf {
-    fn copy_dir(from: &Path, to: &Path) {
-        std::fs::create_dir_all(to).unwrap();
-        for e in std::fs::read_dir(from).unwrap() {
-            let p = e.unwrap().path();
-            let target = to.join(p.file_name().unwrap());
-            if p.is_dir() {
-                copy_dir(&p, &target);
-            } else {
-                std::fs::copy(&p, &target).unwrap();
-            }
-        }
-    }
-    let k = d.join("knowledge");
-    copy_dir(&repo().join("knowledge"), &k);
-    std::fs::write(
-        k.join("tools/d20_only.ron"),
+    common::knowledge_with_tool_set(
+        d,
+        &repo().join("knowledge"),
+        "d20_only",
         r#"(
     id: "d20_only",
     name: "A Ø20 end mill alone",
@@ -418,8 +408,6 @@ fn knowledge_with_d20_only(d: &Path) -> PathBuf {
 )
 "#,
     )
-    .unwrap();
-    k
 }
 
 /// A case made to fail (issue 22): a frame whose pockets have R5.75–R7.5

@@ -7,30 +7,19 @@ use std::process::Command;
 
 use serde_json::Value;
 
+mod common;
+
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let p = e.unwrap().path();
-        let target = to.join(p.file_name().unwrap());
-        if p.is_dir() {
-            copy_dir(&p, &target);
-        } else {
-            std::fs::copy(&p, &target).unwrap();
-        }
-    }
 }
 
 /// The repository's knowledge with one more tool set, `short`: a single
 /// Ø12 end mill with 30 mm flutes whose holder face is 40 mm above its tip.
 fn knowledge_with_short_tool(d: &Path) -> PathBuf {
-    let k = d.join("knowledge");
-    copy_dir(&repo().join("knowledge"), &k);
-    std::fs::write(
-        k.join("tools/short.ron"),
+    common::knowledge_with_tool_set(
+        d,
+        &repo().join("knowledge"),
+        "short",
         r#"(
     id: "short",
     name: "One Ø12 end mill that reaches 38 mm",
@@ -52,8 +41,6 @@ fn knowledge_with_short_tool(d: &Path) -> PathBuf {
 )
 "#,
     )
-    .unwrap();
-    k
 }
 
 /// `builtin:tall_rib` stands 72 mm over its web (top at 92). With a tool
