@@ -624,13 +624,22 @@ fn plan(
         )
     };
     progress.set_message(format!("import {source}"));
+    let started = std::time::Instant::now();
     let mut session = Session::open(&source, setup, knowledge)?;
     progress.inc(1);
+    // Wall time per stage, for `--verbose` on stderr only: the plan and the
+    // JSON stay byte-identical between runs.
+    let mut times = vec![("import".to_string(), started)];
     session.run_to(last, &std::sync::atomic::AtomicBool::new(false), |stage| {
         progress.inc(1);
-        progress.set_message(format!("{stage:?}").to_lowercase());
+        let name = format!("{stage:?}").to_lowercase();
+        progress.set_message(name.clone());
+        times.push((name, std::time::Instant::now()));
     })?;
     progress.finish_and_clear();
+    if verbose {
+        eprint!("{}", report::stage_times(&times, std::time::Instant::now()));
+    }
     let Session {
         plan,
         warnings,

@@ -190,6 +190,23 @@ fn grouped_warnings(s: &mut String, warnings: &[String], verbose: bool) {
     }
 }
 
+/// One line per stage with its wall time, from the instants each began and
+/// the instant the last one ended.
+pub fn stage_times(starts: &[(String, std::time::Instant)], end: std::time::Instant) -> String {
+    let mut out = String::from("stage times:");
+    for (i, (name, start)) in starts.iter().enumerate() {
+        let next = starts.get(i + 1).map_or(end, |(_, t)| *t);
+        out.push_str(&format!(" {name} {:.2} s;", (next - *start).as_secs_f64()));
+    }
+    out.push_str(&format!(
+        " total {:.2} s\n",
+        starts
+            .first()
+            .map_or(0.0, |(_, t)| (end - *t).as_secs_f64())
+    ));
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::kind_of;

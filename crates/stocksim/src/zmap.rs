@@ -327,6 +327,10 @@ pub struct ZMap {
     /// once per operation.
     saved: Vec<u32>,
     generation: u32,
+    /// Where the last sweep left the tool (tip, radius, corner radius): the
+    /// cells under it are already as low as that tool there makes them, so
+    /// the next move from that point need not visit them again.
+    last_end: Option<(DVec3, f64, f64)>,
 }
 
 impl ZMap {
@@ -343,6 +347,7 @@ impl ZMap {
             undo: None,
             saved: Vec::new(),
             generation: 0,
+            last_end: None,
         })
     }
 
@@ -401,9 +406,19 @@ impl ZMap {
 
     /// Sweeps `tool` with its tip along the straight segment `p0 → p1`.
     pub fn sweep_line(&mut self, tool: &ToolShape, p0: DVec3, p1: DVec3, line: u32) -> CutStats {
+        let st = self.sweep_line_from(tool, p0, p1, line);
+        self.last_end = Some((p1, tool.radius(), tool.corner_radius));
+        st
+    }
+
+    fn sweep_line_from(&mut self, tool: &ToolShape, p0: DVec3, p1: DVec3, line: u32) -> CutStats {
         let mut st = CutStats::default();
         let r = tool.radius() - RIM_EPS;
         if r <= 0.0 {
+            return st;
+        }
+        if p0.z.min(p1.z) >= self.blank.max.z {
+            // Stock never stands above the blank's top.
             return st;
         }
         let (a, b) = (p0.truncate(), p1.truncate());
@@ -428,6 +443,9 @@ impl ZMap {
                     continue;
                 };
                 for i in i0..=i1 {
+                    if self.top[j * self.grid.nx + i] as f64 <= z {
+                        continue;
+                    }
                     let rho = (self.grid.center(i, j) - a).length();
                     if let Some(h) = tool.height_at(rho.min(tool.radius())) {
                         self.lower(i, j, z + h, line, &mut st);
@@ -438,6 +456,12 @@ impl ZMap {
         }
         let u = d / len;
         let k = (p1.z - p0.z) / len;
+        // A level or rising move from where the same tool last stood: the
+        // cells whose nearest point of the move is its start keep the height
+        // that stand gave them (for a flat end, every cell under it).
+        let from_last = k >= 0.0 && self.last_end == Some((p0, tool.radius(), tool.corner_radius));
+        let r_in = r - 1e-9;
+        let z_low = p0.z.min(p1.z);
         for j in j0..=j1 {
             let yc = self.grid.center(0, j).y;
             let Some((xlo, xhi)) = capsule_row(a, b, u, len, r, yc) else {
@@ -446,7 +470,22 @@ impl ZMap {
             let Some((i0, i1)) = self.grid.cols(xlo, xhi) else {
                 continue;
             };
+            let (sl, sh) = if from_last {
+                start_disc_row(a, u, r_in, yc, flat)
+            } else {
+                (f64::INFINITY, f64::NEG_INFINITY)
+            };
+            let row = j * self.grid.nx;
             for i in i0..=i1 {
+                // The tool stands nowhere lower than its lowest tip: a cell
+                // already at or below it cannot be cut.
+                if self.top[row + i] as f64 <= z_low {
+                    continue;
+                }
+                let xc = self.grid.x0 + (i as f64 + 0.5) * self.grid.cell;
+                if xc > sl && xc < sh {
+                    continue;
+                }
                 let w = self.grid.center(i, j) - a;
                 let s0 = w.dot(u);
                 let perp = w.perp_dot(u).abs();
@@ -514,6 +553,9 @@ impl ZMap {
         };
         for j in j0..=j1 {
             for i in i0..=i1 {
+                if self.top[j * self.grid.nx + i] as f64 <= z {
+                    continue;
+                }
                 let c = self.grid.center(i, j);
                 let v = c - center;
                 let rho_c = v.length();
@@ -550,7 +592,9 @@ impl ZMap {
                 let r0 = (s - center).length();
                 let r1 = (e - center).length();
                 if (m.end.z - start.z).abs() < 1e-9 && (r0 - r1).abs() < 1e-9 {
-                    return self.sweep_flat_arc(tool, center, s, e, sweep, start.z, line);
+                    let st = self.sweep_flat_arc(tool, center, s, e, sweep, start.z, line);
+                    self.last_end = Some((e.extend(start.z), tool.radius(), tool.corner_radius));
+                    return st;
                 }
                 // Helix or spiral: chords with sagitta ≤ cell/8.
                 let sag = self.grid.cell / 8.0;
@@ -744,6 +788,8 @@ impl ZMap {
 
     /// Restores every cell the current operation changed.
     fn undo_operation(&mut self) {
+        // Restored cells may stand above where the tool last was.
+        self.last_end = None;
         if let Some(u) = self.undo.take() {
             for &(k, top, line) in u.iter() {
                 self.top[k] = top;
@@ -752,6 +798,34 @@ impl ZMap {
         }
         self.begin_undo(true);
     }
+}
+
+/// The open x-interval of row `y` whose cells a move starting at `a` in
+/// direction `u` leaves as the tool standing at `a` (radius `r`) left them:
+/// the whole disc for a flat end; else the half of it behind `a`, where `a`
+/// stays the move's nearest point. Empty as `(∞, −∞)`.
+#[inline]
+fn start_disc_row(a: DVec2, u: DVec2, r: f64, y: f64, flat: bool) -> (f64, f64) {
+    const EMPTY: (f64, f64) = (f64::INFINITY, f64::NEG_INFINITY);
+    let dy = y - a.y;
+    let h2 = r * r - dy * dy;
+    if h2 <= 0.0 {
+        return EMPTY;
+    }
+    let h = h2.sqrt();
+    let (mut lo, mut hi) = (a.x - h, a.x + h);
+    if !flat {
+        // Behind a: (x − a.x)·u.x + dy·u.y ≤ 0.
+        let c = -dy * u.y;
+        if u.x > 1e-12 {
+            hi = hi.min(a.x + c / u.x);
+        } else if u.x < -1e-12 {
+            lo = lo.max(a.x + c / u.x);
+        } else if c < 0.0 {
+            return EMPTY;
+        }
+    }
+    (lo, hi)
 }
 
 /// The x-interval of the capsule (segment `a→b` grown by `r`) on the row `y`.
