@@ -173,6 +173,44 @@ pub fn capsules(segments: impl Iterator<Item = (DVec2, DVec2)>, reach: f64) -> V
         .collect()
 }
 
+/// The points within `reach` of the segments (at least: the round joins and
+/// caps are polygons around their arcs), as shapes: the segments chained
+/// where one ends at the next one's start and stroked with round joins and
+/// caps. One stroke per chain, not one capsule per segment: the capsules of
+/// a tessellated fillet's hundreds of short chords overlap dozens deep, and
+/// their union cost grew with that overlap.
+pub fn band_along(
+    segments: impl Iterator<Item = (DVec2, DVec2)>,
+    reach: f64,
+) -> Vec<Vec<Vec<[f64; 2]>>> {
+    use i_overlay::mesh::float::stroke::offset::StrokeOffset;
+    use i_overlay::mesh::float::style::{LineCap, LineJoin, StrokeStyle};
+    const ANGLE: f64 = 0.05;
+    let mut chains: Vec<Vec<[f64; 2]>> = Vec::new();
+    for (a, b) in segments.filter(|(a, b)| a.distance_squared(*b) > 1e-18) {
+        match chains.last_mut() {
+            Some(c)
+                if c.last()
+                    .is_some_and(|p| DVec2::from(*p).distance_squared(a) < 1e-18) =>
+            {
+                c.push([b.x, b.y]);
+            }
+            _ => chains.push(vec![[a.x, a.y], [b.x, b.y]]),
+        }
+    }
+    if chains.is_empty() || reach.is_nan() || reach <= 0.0 {
+        return Vec::new();
+    }
+    // Chords of the round pieces turn ANGLE/2 at most either side of a
+    // vertex on the circle: widened so the chords lie outside the circle.
+    let width = 2.0 * reach / (0.5 * ANGLE).cos();
+    let style = StrokeStyle::new(width)
+        .line_join(LineJoin::Round(ANGLE))
+        .start_cap(LineCap::Round(ANGLE))
+        .end_cap(LineCap::Round(ANGLE));
+    chains.stroke(style, false)
+}
+
 pub fn dist_point_seg(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     let ab = b - a;
     let l2 = ab.length_squared();
@@ -627,6 +665,68 @@ mod edge_grid_tests {
                     if e.distance(p) < reach {
                         prop_assert!(cand.contains(&(k as u32)), "edge {k} at {} from {p}", e.distance(p));
                     }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod band_tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Whether `p` lies in the shapes (non-zero winding over all contours).
+    fn inside(shapes: &[Vec<Vec<[f64; 2]>>], p: DVec2) -> bool {
+        let mut w = 0i32;
+        for c in shapes.iter().flatten() {
+            for i in 0..c.len() {
+                let (a, b) = (c[i], c[(i + 1) % c.len()]);
+                let (a, b) = (DVec2::new(a[0], a[1]), DVec2::new(b[0], b[1]));
+                if (a.y <= p.y) != (b.y <= p.y) {
+                    let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+                    if x > p.x {
+                        w += if b.y > a.y { 1 } else { -1 };
+                    }
+                }
+            }
+        }
+        w != 0
+    }
+
+    proptest! {
+        /// The band along chained and loose segments holds every point
+        /// within the reach of one (never less), and nothing beyond the
+        /// reach by more than 0.1 %.
+        #[test]
+        fn band_holds_the_reach_and_no_more(
+            walk in prop::collection::vec((-3.0f64..3.0, -3.0f64..3.0), 2..40),
+            loose in prop::collection::vec(((-30.0f64..30.0, -30.0f64..30.0), (-30.0f64..30.0, -30.0f64..30.0)), 0..4),
+            reach in 0.5f64..10.0,
+            queries in prop::collection::vec((-45.0f64..45.0, -45.0f64..45.0), 1..60),
+        ) {
+            // A noisy chain (a tessellated fillet) and a few loose segments.
+            let mut p = DVec2::ZERO;
+            let mut segs = Vec::new();
+            for &(dx, dy) in &walk {
+                let q = p + DVec2::new(dx, dy);
+                segs.push((p, q));
+                p = q;
+            }
+            segs.extend(loose.iter().map(|&((ax, ay), (bx, by))| (DVec2::new(ax, ay), DVec2::new(bx, by))));
+            let band = band_along(segs.iter().copied(), reach);
+            for &(x, y) in &queries {
+                let q = DVec2::new(x, y);
+                let d = segs
+                    .iter()
+                    .filter(|(a, b)| a.distance_squared(*b) > 1e-18)
+                    .map(|&(a, b)| dist_point_seg(q, a, b))
+                    .fold(f64::INFINITY, f64::min);
+                if d < reach * 0.999 {
+                    prop_assert!(inside(&band, q), "{q} at {d} of {reach} is outside the band");
+                }
+                if d > reach * 1.001 {
+                    prop_assert!(!inside(&band, q), "{q} at {d} of {reach} is inside the band");
                 }
             }
         }

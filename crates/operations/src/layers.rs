@@ -886,9 +886,9 @@ fn away_from_product(polys: &[Vec<DVec2>], product: &[Edge2], reach: f64) -> Vec
         .iter()
         .map(|p| p.iter().map(|q| [q.x, q.y]).collect())
         .collect();
-    let capsules = crate::geom::capsules(product.iter().map(|e| (e.a, e.b)), reach);
+    let band = crate::geom::band_along(product.iter().map(|e| (e.a, e.b)), reach);
     let out: crate::free::Shapes =
-        subject.overlay_as::<i64>(&capsules, OverlayRule::Difference, FillRule::NonZero);
+        subject.overlay_as::<i64>(&band, OverlayRule::Difference, FillRule::NonZero);
     out.into_iter()
         .flatten()
         .filter(|c| c.len() >= 3)
