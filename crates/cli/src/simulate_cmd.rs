@@ -31,6 +31,10 @@ pub struct SimulateArgs {
     /// Tolerance for gouges and leftover, mm.
     #[arg(long, default_value_t = thinplan_stocksim::DEFAULT_TOL)]
     pub tol: f64,
+    /// How near a part face may pass to a cell centre and not be judged
+    /// there, mm (the part's tessellation error).
+    #[arg(long, default_value_t = thinplan_stocksim::DEFAULT_WALL_TOL)]
+    pub wall_tol: f64,
     /// Report feed moves going down into stock steeper than this (degrees
     /// from horizontal) as plunges.
     #[arg(long)]
@@ -76,6 +80,7 @@ pub fn run(args: &SimulateArgs) -> Result<bool, String> {
     let cfg = SimConfig {
         cell: args.cell,
         tol: args.tol,
+        wall_tol: args.wall_tol,
         blank,
         checks: thinplan_stocksim::MoveChecks {
             max_descent_deg: args.max_descent_deg,

@@ -13,6 +13,9 @@ pub struct VerificationKnowledge {
     pub cell: f64,
     /// Gouge and cut tolerance, mm.
     pub tolerance: f64,
+    /// How near a part face may pass to a cell centre and still not be
+    /// judged there, mm: the part's tessellation error, not `tolerance`.
+    pub wall_tolerance: f64,
     /// Missed material above which a plan is incomplete, mm³.
     pub max_missed_mm3: f64,
     /// Material no tool of the program reaches above which a plan is
@@ -45,6 +48,8 @@ impl VerificationKnowledge {
         // Below 0.02 mm a 1 m part needs 2.5e9 cells.
         range("cell", self.cell, 0.02, 5.0);
         range("tolerance", self.tolerance, 0.001, 1.0);
+        // Above `tolerance` a tool could cut into a wall unseen.
+        range("wall_tolerance", self.wall_tolerance, 0.0, self.tolerance);
         range("max_missed_mm3", self.max_missed_mm3, 0.0, 1e12);
         range("max_unreachable_mm3", self.max_unreachable_mm3, 0.0, 1e12);
         range("max_descent_deg", self.max_descent_deg, 1.0, 90.0);

@@ -18,24 +18,29 @@ pub struct PartField {
     /// Top height at each cell centre (the highest hit of a vertical ray
     /// against the tessellation); the floor where no part lies above.
     pub top: Vec<f32>,
-    /// The lowest / highest of the tops at the centre and at the four points
-    /// `lateral` mm away along ±X and ±Y: a wall that passes within `lateral`
-    /// of a centre does not turn a cut at the wall into a gouge, or material
-    /// at its foot into leftover.
+    /// The lowest of the tops at the centre and at the four points `near`
+    /// mm away along ±X and ±Y: a wall that passes within `near` of a
+    /// centre does not turn a cut at the wall into a gouge.
     pub lo: Vec<f32>,
+    /// The highest of the tops at the centre and at the four points `far`
+    /// mm away: a wall within `far` of a centre does not turn material at
+    /// its foot into leftover.
     pub hi: Vec<f32>,
 }
 
-/// The part's height field by vertical rays (see [`PartField`]). Returns the
-/// field and warnings (faces that failed to tessellate).
+/// The part's height field by vertical rays (see [`PartField`]): `near` is
+/// how near a wall may pass to a centre and a cut there not be a gouge,
+/// `far` how near it may pass and material there not be leftover. Returns
+/// the field and warnings (faces that failed to tessellate).
 pub fn part_heights(
     brep: &Brep,
     grid: &Grid,
     floor: f64,
-    lateral: f64,
+    near: f64,
+    far: f64,
 ) -> (PartField, Vec<String>) {
     let tol = TessTolerance {
-        chord: (lateral / 5.0).clamp(1e-4, 0.01),
+        chord: (near.min(far) / 5.0).clamp(1e-4, 0.01),
         angle: 0.2,
     };
     let mesh = tessellate(brep, &tol);
@@ -47,17 +52,20 @@ pub fn part_heights(
         })
         .collect();
     let top = raster(&mesh, grid, floor, DVec2::ZERO);
-    let mut lo = top.clone();
-    let mut hi = top.clone();
-    if lateral > 0.0 {
-        for d in [DVec2::X, DVec2::NEG_X, DVec2::Y, DVec2::NEG_Y] {
-            let f = raster(&mesh, grid, floor, d * lateral);
-            for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(f) {
-                *l = l.min(v);
-                *h = h.max(v);
+    let around = |lateral: f64, keep: fn(f32, f32) -> f32| {
+        let mut out = top.clone();
+        if lateral > 0.0 {
+            for d in [DVec2::X, DVec2::NEG_X, DVec2::Y, DVec2::NEG_Y] {
+                let f = raster(&mesh, grid, floor, d * lateral);
+                for (o, v) in out.iter_mut().zip(f) {
+                    *o = keep(*o, v);
+                }
             }
         }
-    }
+        out
+    };
+    let lo = around(near, f32::min);
+    let hi = around(far, f32::max);
     (PartField { top, lo, hi }, warnings)
 }
 

@@ -31,6 +31,8 @@ pub const DEFAULT_CELL: f64 = 0.2;
 pub const FINE_CELL: f64 = 0.05;
 /// Default comparison tolerance, mm.
 pub const DEFAULT_TOL: f64 = 0.05;
+/// Default wall tolerance, mm (see [`SimConfig::wall_tol`]).
+pub const DEFAULT_WALL_TOL: f64 = 0.01;
 
 /// Simulation settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,6 +41,12 @@ pub struct SimConfig {
     pub cell: f64,
     /// Tolerance for gouge and leftover, mm.
     pub tol: f64,
+    /// How near a part face may pass to a cell centre and a cut there still
+    /// not be a gouge, mm: the tessellation's error, not the gouge
+    /// tolerance (a tool reaching `tol` into a wall would go unseen wherever
+    /// the wall stood within `tol` of a row of centres). Material at a
+    /// wall's foot is leftover only beyond `tol` of the wall.
+    pub wall_tol: f64,
     /// The blank; `None` = the part's bounding box.
     pub blank: Option<Blank>,
     /// Plunges and shank contact to report as crashes (none by default).
@@ -50,6 +58,7 @@ impl Default for SimConfig {
         SimConfig {
             cell: DEFAULT_CELL,
             tol: DEFAULT_TOL,
+            wall_tol: DEFAULT_WALL_TOL,
             blank: None,
             checks: MoveChecks::default(),
         }
@@ -201,7 +210,7 @@ pub fn simulate(
     let mut stock = ZMap::new(blank, cfg.cell)?;
     let grid = stock.grid;
     let floor = blank.min.z as f32;
-    let (field, pw) = compare::part_heights(part, &grid, blank.min.z, cfg.tol);
+    let (field, pw) = compare::part_heights(part, &grid, blank.min.z, cfg.wall_tol, cfg.tol);
     warnings.extend(pw);
     if !cfg.checks.operations.is_empty() {
         // Operations are judged as they cut: a gouge undoes its operation.

@@ -262,3 +262,51 @@ fn leftover_is_missed_only_where_a_tool_reaches_the_part() {
     let want: Vec<CellClass> = cells.iter().map(|c| c.3).collect();
     assert_eq!(got, want);
 }
+
+/// A cut into a wall is seen wherever a row of cell centres lies inside
+/// the wall by more than the wall tolerance (the tessellation's error), not
+/// only by more than the gouge tolerance: a centre 0.03 mm inside a wall is
+/// judged, so a pass 0.1 mm into the wall is a gouge the height of the
+/// wall, and a pass tangent to it is not.
+#[test]
+fn a_pass_into_a_wall_between_rows_of_centres_is_a_gouge() {
+    // The pocket's wall at y = 9.93: the centres (cell 0.2) at y = 9.9
+    // lie 0.03 inside it, those at 10.1 in the pocket.
+    let text = r#"Part(
+    name: "wall",
+    description: "stocksim wall tolerance",
+    prisms: [
+        Prism(id: "base", extent: (0.0, 5.0), profile: (outer: Rect(min: (0.0, 0.0), max: (60.0, 40.0)))),
+        Prism(id: "ring", extent: (5.0, 20.0),
+              profile: (outer: Rect(min: (0.0, 0.0), max: (60.0, 40.0)),
+                        holes: [Rect(min: (10.0, 9.93), max: (50.0, 30.0))])),
+    ],
+)"#;
+    let part = thinplan_native::parse_part(text, "wall.part.ron")
+        .unwrap()
+        .build()
+        .unwrap();
+    let pass = |y: f64| {
+        format!(
+            "G21 G17 G90\nT1 M6\nS12000 M3\nG0 X15 Y20\nG0 Z25\nG1 Z5 F300\nG1 Y{y}\nG1 X45\n\
+             G0 Z25\nM5\nM30\n"
+        )
+    };
+    let run = |y: f64, wall_tol: f64| {
+        let p = parse(&pass(y), "wall.ngc").unwrap();
+        let cfg = SimConfig {
+            wall_tol,
+            ..SimConfig::default()
+        };
+        simulate(&part, &p, &tools(), &cfg).unwrap().report.gouges
+    };
+    // Ø8 at y = 13.83 reaches y = 9.83, 0.1 into the wall.
+    let into = run(13.83, thinplan_stocksim::DEFAULT_WALL_TOL);
+    assert!(into.cells >= 100, "{into:?}");
+    assert!((into.worst_mm - 15.0).abs() < 0.01, "{}", into.worst_mm);
+    // Tangent to the wall: nothing.
+    assert_eq!(run(13.93, thinplan_stocksim::DEFAULT_WALL_TOL).cells, 0);
+    // Judged only 0.05 inside the wall (the gouge tolerance), the same
+    // pass goes unseen: the blind spot the wall tolerance closes.
+    assert_eq!(run(13.83, 0.05).cells, 0);
+}

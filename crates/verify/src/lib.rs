@@ -164,6 +164,7 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         provenance: Provenance::new(ProvenanceSource::Knowledge, "verification")
             .with_value("cell", cfg.cell)
             .with_value("tolerance", cfg.tolerance)
+            .with_value("wall_tolerance", cfg.wall_tolerance)
             .with_value("max_missed_mm3", cfg.max_missed_mm3)
             .with_value("max_unreachable_mm3", cfg.max_unreachable_mm3)
             .with_value("max_descent_deg", cfg.max_descent_deg)
@@ -312,6 +313,7 @@ fn replay(
     let sim_cfg = SimConfig {
         cell: cfg.cell,
         tol: cfg.tolerance,
+        wall_tol: cfg.wall_tolerance,
         blank: None,
         checks: MoveChecks {
             flute_length,
