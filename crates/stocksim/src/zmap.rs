@@ -38,6 +38,9 @@ pub const REMOVAL_EPS: f64 = 1e-3;
 /// A grid rim margin against floating-point grazing: a tool whose edge runs
 /// exactly through a cell centre does not cut it.
 const RIM_EPS: f64 = 1e-7;
+/// End radii of a level arc this close are one circle (their mean): the
+/// rounding of a program's coordinates, as LinuxCNC reads them.
+const ARC_RADIUS_TOL: f64 = 0.002;
 
 /// An axis-aligned box blank, mm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -522,6 +525,7 @@ impl ZMap {
         center: DVec2,
         s: DVec2,
         e: DVec2,
+        ra: f64,
         sweep: f64,
         z: f64,
         line: u32,
@@ -534,7 +538,6 @@ impl ZMap {
         } else {
             (e, -sweep)
         };
-        let ra = (s - center).length();
         let a0 = (from - center).to_angle();
         let (mut lo, mut hi) = (s.min(e), s.max(e));
         for q in 0..4 {
@@ -591,8 +594,12 @@ impl ZMap {
                 let (s, e) = (start.truncate(), m.end.truncate());
                 let r0 = (s - center).length();
                 let r1 = (e - center).length();
-                if (m.end.z - start.z).abs() < 1e-9 && (r0 - r1).abs() < 1e-9 {
-                    let st = self.sweep_flat_arc(tool, center, s, e, sweep, start.z, line);
+                // A program's coordinates are rounded (0.001 mm): its arcs'
+                // end radii differ by that much, and chords would sweep
+                // them up to a cell/8 inside the arc.
+                if (m.end.z - start.z).abs() < 1e-9 && (r0 - r1).abs() <= ARC_RADIUS_TOL {
+                    let ra = 0.5 * (r0 + r1);
+                    let st = self.sweep_flat_arc(tool, center, s, e, ra, sweep, start.z, line);
                     self.last_end = Some((e.extend(start.z), tool.radius(), tool.corner_radius));
                     return st;
                 }

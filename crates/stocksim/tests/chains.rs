@@ -68,3 +68,33 @@ proptest! {
         }
     }
 }
+
+/// A level arc whose end radii differ by the program's rounding (0.001 mm)
+/// is swept as one circle, exactly: the tool's rim takes a cell 0.0034 mm
+/// inside its reach at the middle of the arc, where chords of a cell/8
+/// sagitta would pass it by 0.02 mm.
+#[test]
+fn a_level_arc_with_rounded_ends_is_swept_exactly() {
+    use glam::DVec2;
+    use thinplan_stocksim::{parse, ToolLibrary};
+    let blank = Blank {
+        min: DVec3::new(-10.0, -10.0, -5.0),
+        max: DVec3::new(10.0, 10.0, 0.0),
+    };
+    let mut z = ZMap::new(blank, 0.25).unwrap();
+    // Centre (0, 0), start radius 3.87985, end radius 3.88071, ±30°.
+    let program = parse(
+        "G21 G17 G90\nT1 M6\nS10000 M3\nG0 X3.360 Y-1.940 Z1\nG1 Z-1 F1000\n\
+         G3 X3.361 Y1.940 I-3.360 J1.940\nG0 Z5\nM30\n",
+        "arc.ngc",
+    )
+    .unwrap();
+    let tools = ToolLibrary::from([(1, ToolShape::flat(2.0))]);
+    z.replay(&program, &tools).unwrap();
+    // The cell centred at (4.875, 0.125): 0.9966 from the arc.
+    let inside = z.height_at(DVec2::new(4.875, 0.125)).unwrap();
+    assert!((inside + 1.0).abs() < 1e-6, "{inside}");
+    // The next one out, 1.2466 from it, stands.
+    let outside = z.height_at(DVec2::new(5.125, 0.125)).unwrap();
+    assert_eq!(outside, 0.0);
+}
