@@ -15,8 +15,8 @@
 //! - a constant-Z arc is exact too: the nearest point of the arc to a cell is
 //!   radial if the cell's angle lies in the arc's span, else an end point.
 //! - helical or spiral arcs (Z or radius changing) are cut into chords whose
-//!   sagitta is at most ⅛ cell, each swept exactly as above, so the error is
-//!   below ⅛ cell (< ¼ cell as required).
+//!   sagitta is at most ⅛ cell (a helix: at most 0.001 mm), each swept
+//!   exactly as above, so the error is below ⅛ cell (< ¼ cell as required).
 //!
 //! The only discretisation is the grid itself: the stock is known at cell
 //! centres, and volumes are sums of cell columns.
@@ -41,6 +41,9 @@ const RIM_EPS: f64 = 1e-7;
 /// End radii of a level arc this close are one circle (their mean): the
 /// rounding of a program's coordinates, as LinuxCNC reads them.
 const ARC_RADIUS_TOL: f64 = 0.002;
+/// Sagitta of the chords a helix is swept by, mm: half the program's
+/// rounding.
+const HELIX_SAGITTA: f64 = 0.001;
 
 /// An axis-aligned box blank, mm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -603,8 +606,14 @@ impl ZMap {
                     self.last_end = Some((e.extend(start.z), tool.radius(), tool.corner_radius));
                     return st;
                 }
-                // Helix or spiral: chords with sagitta ≤ cell/8.
-                let sag = self.grid.cell / 8.0;
+                // Helix or spiral: chords with sagitta ≤ cell/8; a helix
+                // (a ramp beside level arcs of its own radius) within the
+                // program's rounding, so it cuts no more inside them.
+                let sag = if (r0 - r1).abs() <= ARC_RADIUS_TOL {
+                    (self.grid.cell / 8.0).min(HELIX_SAGITTA)
+                } else {
+                    self.grid.cell / 8.0
+                };
                 let rmax = r0.max(r1);
                 let step = if sag >= rmax {
                     std::f64::consts::FRAC_PI_2
