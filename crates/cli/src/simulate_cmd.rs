@@ -35,6 +35,11 @@ pub struct SimulateArgs {
     /// there, mm (the part's tessellation error).
     #[arg(long, default_value_t = thinplan_stocksim::DEFAULT_WALL_TOL)]
     pub wall_tol: f64,
+    /// Where the cells start, as a fraction of a cell past the blank's low
+    /// corner in X and Y ([0, 1); 0.5: centres where the default grid has
+    /// its corners).
+    #[arg(long, default_value_t = 0.0)]
+    pub grid_shift: f64,
     /// Report feed moves going down into stock steeper than this (degrees
     /// from horizontal) as plunges.
     #[arg(long)]
@@ -81,6 +86,7 @@ pub fn run(args: &SimulateArgs) -> Result<bool, String> {
         cell: args.cell,
         tol: args.tol,
         wall_tol: args.wall_tol,
+        grid_shift: args.grid_shift,
         blank,
         checks: thinplan_stocksim::MoveChecks {
             max_descent_deg: args.max_descent_deg,

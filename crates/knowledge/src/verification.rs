@@ -16,6 +16,11 @@ pub struct VerificationKnowledge {
     /// How near a part face may pass to a cell centre and still not be
     /// judged there, mm: the part's tessellation error, not `tolerance`.
     pub wall_tolerance: f64,
+    /// The replays' grids, each where its cells start as a fraction of a
+    /// cell past the blank's corner (`[0, 1)`): the first one's leftover
+    /// is reported; every grid's problems count, so a fin narrower than a
+    /// cell one grid misses the next may see.
+    pub grid_shifts: Vec<f64>,
     /// Missed material above which a plan is incomplete, mm³.
     pub max_missed_mm3: f64,
     /// Material no tool of the program reaches above which a plan is
@@ -55,6 +60,23 @@ impl VerificationKnowledge {
         range("max_descent_deg", self.max_descent_deg, 1.0, 90.0);
         range("max_plunge_mm3", self.max_plunge_mm3, 0.0, 1e6);
         range("max_rounds", self.max_rounds as f64, 1.0, 20.0);
+        if self.grid_shifts.is_empty() || self.grid_shifts.len() > 4 {
+            out.push((
+                "grid_shifts",
+                format!(
+                    "`grid_shifts` has {} grids; it needs 1 to 4 (each is a whole replay)",
+                    self.grid_shifts.len()
+                ),
+            ));
+        }
+        for &g in &self.grid_shifts {
+            if !(g.is_finite() && (0.0..1.0).contains(&g)) {
+                out.push((
+                    "grid_shifts",
+                    format!("a grid shift is {g}; each must lie in [0, 1) (a fraction of a cell)"),
+                ));
+            }
+        }
         out
     }
 }

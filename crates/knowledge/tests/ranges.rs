@@ -315,3 +315,25 @@ fn the_radius_profile_steps_from_cutter_to_neck_shank_and_holder() {
         [(26.0, 6.0), (45.0, 6.0), (125.0, 12.0)]
     );
 }
+
+#[test]
+fn a_grid_shift_outside_a_cell_is_refused_at_its_line() {
+    refused(
+        "grid_shift",
+        "verification.ron",
+        "grid_shifts: [0.0, 0.5]",
+        "grid_shifts: [0.0, 1.5]",
+        "a grid shift is 1.5; each must lie in [0, 1)",
+    );
+}
+
+#[test]
+fn no_replay_grid_is_refused_at_its_line() {
+    refused(
+        "no_grid",
+        "verification.ron",
+        "grid_shifts: [0.0, 0.5]",
+        "grid_shifts: []",
+        "`grid_shifts` has 0 grids; it needs 1 to 4",
+    );
+}

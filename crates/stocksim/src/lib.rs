@@ -47,6 +47,9 @@ pub struct SimConfig {
     /// the wall stood within `tol` of a row of centres). Material at a
     /// wall's foot is leftover only beyond `tol` of the wall.
     pub wall_tol: f64,
+    /// Where the cells start, as a fraction of a cell past the blank's low
+    /// corner in X and Y (`[0, 1)`; 0: at the corner).
+    pub grid_shift: f64,
     /// The blank; `None` = the part's bounding box.
     pub blank: Option<Blank>,
     /// Plunges and shank contact to report as crashes (none by default).
@@ -59,6 +62,7 @@ impl Default for SimConfig {
             cell: DEFAULT_CELL,
             tol: DEFAULT_TOL,
             wall_tol: DEFAULT_WALL_TOL,
+            grid_shift: 0.0,
             blank: None,
             checks: MoveChecks::default(),
         }
@@ -207,7 +211,7 @@ pub fn simulate(
             }
         }
     };
-    let mut stock = ZMap::new(blank, cfg.cell)?;
+    let mut stock = ZMap::shifted(blank, cfg.cell, cfg.grid_shift)?;
     let grid = stock.grid;
     let floor = blank.min.z as f32;
     let (field, pw) = compare::part_heights(part, &grid, blank.min.z, cfg.wall_tol, cfg.tol);

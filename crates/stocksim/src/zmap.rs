@@ -342,8 +342,23 @@ pub struct ZMap {
 impl ZMap {
     /// A full box blank with cells of `cell` mm.
     pub fn new(blank: Blank, cell: f64) -> Result<ZMap, SimError> {
+        ZMap::shifted(blank, cell, 0.0)
+    }
+
+    /// The Z-map of `blank` whose cells start `shift` of a cell (in
+    /// `[0, 1)`) past the blank's low corner in X and Y: a second grid
+    /// shifted by half a cell has its centres where the first one's
+    /// corners are, and sees the fins narrower than a cell it may miss.
+    pub fn shifted(blank: Blank, cell: f64, shift: f64) -> Result<ZMap, SimError> {
         blank.validate().map_err(SimError)?;
-        let grid = Grid::new(blank.min.truncate(), blank.max.truncate(), cell).map_err(SimError)?;
+        if !(0.0..1.0).contains(&shift) {
+            return Err(SimError(format!(
+                "grid shift {shift} must be at least 0 and less than 1 (a fraction of a cell)"
+            )));
+        }
+        let min = blank.min.truncate() + DVec2::splat(shift * cell);
+        let max = blank.max.truncate().max(min);
+        let grid = Grid::new(min, max, cell).map_err(SimError)?;
         Ok(ZMap {
             grid,
             blank,

@@ -208,3 +208,55 @@ fn missing_tool_shape_is_an_error() {
     let e = z.replay(&p, &ToolLibrary::new()).unwrap_err();
     assert!(e.0.contains("line 3") && e.0.contains("T7"), "{e}");
 }
+
+/// Highest stock any cell shows between `x0` and `x1` along `y`.
+fn highest_between(z: &ZMap, x0: f64, x1: f64, y: f64) -> f64 {
+    let n = ((x1 - x0) / 0.005).ceil() as usize;
+    (0..=n)
+        .filter_map(|k| z.height_at(DVec2::new(x0 + (x1 - x0) * k as f64 / n as f64, y)))
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// A fin at least half a cell wide between two slots stands at a centre of
+/// the grid or of the grid shifted by half a cell, wherever it lies; the
+/// grid alone misses some of them.
+#[test]
+fn a_fin_half_a_cell_wide_stands_on_one_of_two_grids_half_a_cell_apart() {
+    let cell = 0.25;
+    let mut missed_by_one = 0;
+    for k in 0..97 {
+        let a = 50.0 + k as f64 * 0.0103;
+        for w in [0.5 * cell + 1e-3, 0.6 * cell, 0.9 * cell] {
+            let prog = header(&format!(
+                "G0 X{:.4} Y20\nG1 Z15 F300\nG1 Y80\nG0 Z25\nG0 X{:.4} Y20\nG1 Z15\nG1 Y80\n",
+                a - 5.0,
+                a + w + 5.0
+            ));
+            let p = parse(&prog, "t.ngc").unwrap();
+            let tools = ToolLibrary::from([(1, ToolShape::flat(10.0))]);
+            let seen: Vec<bool> = [0.0, 0.5]
+                .iter()
+                .map(|&shift| {
+                    let mut z = ZMap::shifted(blank(), cell, shift).unwrap();
+                    z.replay(&p, &tools).unwrap();
+                    highest_between(&z, a - 2.0, a + w + 2.0, 50.0) > 19.999
+                })
+                .collect();
+            assert!(
+                seen[0] || seen[1],
+                "fin at {a} wide {w} seen on neither grid"
+            );
+            if !seen[0] {
+                missed_by_one += 1;
+            }
+        }
+    }
+    assert!(missed_by_one > 0);
+}
+
+#[test]
+fn a_grid_shift_outside_a_cell_is_refused() {
+    for s in [-0.1, 1.0, f64::NAN] {
+        assert!(ZMap::shifted(blank(), 0.25, s).is_err(), "{s}");
+    }
+}

@@ -165,6 +165,7 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
             .with_value("cell", cfg.cell)
             .with_value("tolerance", cfg.tolerance)
             .with_value("wall_tolerance", cfg.wall_tolerance)
+            .with_value("grids", cfg.grid_shifts.len() as f64)
             .with_value("max_missed_mm3", cfg.max_missed_mm3)
             .with_value("max_unreachable_mm3", cfg.max_unreachable_mm3)
             .with_value("max_descent_deg", cfg.max_descent_deg)
@@ -310,10 +311,11 @@ fn replay(
         .enumerate()
         .map(|(i, t)| (i as u32 + 1, t.flute_length))
         .collect();
-    let sim_cfg = SimConfig {
+    let mut sim_cfg = SimConfig {
         cell: cfg.cell,
         tol: cfg.tolerance,
         wall_tol: cfg.wall_tolerance,
+        grid_shift: 0.0,
         blank: None,
         checks: MoveChecks {
             flute_length,
@@ -327,8 +329,44 @@ fn replay(
                 .collect(),
         },
     };
-    let sim = simulate(brep, &program, &table, &sim_cfg)
-        .map_err(|e| VerifyError(format!("verification: the replay failed: {e}")))?;
+    let mut problems: Vec<Problem> = Vec::new();
+    let mut left: Vec<LeftMaterial> = Vec::new();
+    for (g, &shift) in cfg.grid_shifts.iter().enumerate() {
+        sim_cfg.grid_shift = shift;
+        let sim = simulate(brep, &program, &table, &sim_cfg)
+            .map_err(|e| VerifyError(format!("verification: the replay failed: {e}")))?;
+        // A later grid adds what the earlier ones did not see.
+        for p in grid_problems(&sim, &nc) {
+            if !problems
+                .iter()
+                .any(|q| q.kind == p.kind && q.operation == p.operation)
+            {
+                problems.push(p);
+            }
+        }
+        if g == 0 {
+            let r = &sim.report;
+            left = [
+                (LeftReason::Missed, &r.leftover_missed),
+                (LeftReason::AboveReach, &r.leftover_above_reach),
+                (LeftReason::Unreachable, &r.leftover_unreachable),
+            ]
+            .into_iter()
+            .filter(|(_, d)| d.cells > 0)
+            .map(|(reason, d)| left_of(reason, d))
+            .collect();
+        }
+    }
+    problems.extend(holder_collisions(plan, k, brep));
+    Ok(Replay { problems, left })
+}
+
+/// What one replay found: operations undone as they cut, each judged on
+/// the stock the ones before it leave; crashes; gouges.
+fn grid_problems(
+    sim: &thinplan_stocksim::Simulation,
+    nc: &thinplan_post::NcProgram,
+) -> Vec<Problem> {
     let problem = |c: &Crash, operation: Option<OperationId>| Problem {
         kind: match c.kind {
             CrashKind::RapidIntoStock => ProblemKind::RapidThroughStock,
@@ -343,8 +381,6 @@ fn replay(
         depth_mm: c.depth_mm,
         volume_mm3: c.volume_mm3,
     };
-    // Operations undone during the replay, each judged on the stock the
-    // ones before it leave; then what no operation owns.
     let mut problems: Vec<Problem> = sim
         .report
         .excluded
@@ -354,19 +390,8 @@ fn replay(
     for c in &sim.report.crashes {
         problems.push(problem(c, nc.operation_at(c.line)));
     }
-    problems.extend(gouges(&sim, &nc));
-    problems.extend(holder_collisions(plan, k, brep));
-    let r = &sim.report;
-    let left = [
-        (LeftReason::Missed, &r.leftover_missed),
-        (LeftReason::AboveReach, &r.leftover_above_reach),
-        (LeftReason::Unreachable, &r.leftover_unreachable),
-    ]
-    .into_iter()
-    .filter(|(_, d)| d.cells > 0)
-    .map(|(reason, d)| left_of(reason, d))
-    .collect();
-    Ok(Replay { problems, left })
+    problems.extend(gouges(sim, nc));
+    problems
 }
 
 fn left_of(reason: LeftReason, d: &DefectSummary) -> LeftMaterial {
