@@ -311,7 +311,7 @@ fn replay(
         .enumerate()
         .map(|(i, t)| (i as u32 + 1, t.flute_length))
         .collect();
-    let mut sim_cfg = SimConfig {
+    let sim_cfg = SimConfig {
         cell: cfg.cell,
         tol: cfg.tolerance,
         wall_tol: cfg.wall_tolerance,
@@ -329,12 +329,32 @@ fn replay(
                 .collect(),
         },
     };
+    // The grids are independent replays: each on its own thread, the
+    // results taken in the knowledge's order.
+    let sims: Vec<Result<thinplan_stocksim::Simulation, String>> = std::thread::scope(|scope| {
+        let runs: Vec<_> = cfg
+            .grid_shifts
+            .iter()
+            .map(|&shift| {
+                let cfg = SimConfig {
+                    grid_shift: shift,
+                    ..sim_cfg.clone()
+                };
+                let (program, table) = (&program, &table);
+                scope.spawn(move || simulate(brep, program, table, &cfg).map_err(|e| e.to_string()))
+            })
+            .collect();
+        runs.into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Err("the replay stopped unexpectedly".into()))
+            })
+            .collect()
+    });
     let mut problems: Vec<Problem> = Vec::new();
     let mut left: Vec<LeftMaterial> = Vec::new();
-    for (g, &shift) in cfg.grid_shifts.iter().enumerate() {
-        sim_cfg.grid_shift = shift;
-        let sim = simulate(brep, &program, &table, &sim_cfg)
-            .map_err(|e| VerifyError(format!("verification: the replay failed: {e}")))?;
+    for (g, sim) in sims.into_iter().enumerate() {
+        let sim = sim.map_err(|e| VerifyError(format!("verification: the replay failed: {e}")))?;
         // A later grid adds what the earlier ones did not see.
         for p in grid_problems(&sim, &nc) {
             if !problems
