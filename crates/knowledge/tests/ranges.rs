@@ -321,7 +321,7 @@ fn a_grid_shift_outside_a_cell_is_refused_at_its_line() {
     refused(
         "grid_shift",
         "verification.ron",
-        "grid_shifts: [0.0, 0.5]",
+        "grid_shifts: [0.0, 0.45]",
         "grid_shifts: [0.0, 1.5]",
         "a grid shift is 1.5; each must lie in [0, 1)",
     );
@@ -332,7 +332,7 @@ fn no_replay_grid_is_refused_at_its_line() {
     refused(
         "no_grid",
         "verification.ron",
-        "grid_shifts: [0.0, 0.5]",
+        "grid_shifts: [0.0, 0.45]",
         "grid_shifts: []",
         "`grid_shifts` has 0 grids; it needs 1 to 4",
     );
