@@ -5,7 +5,7 @@
 use cavalier_contours::polyline::{
     seg_arc_radius_and_center, PlineCreation, PlineSource, PlineSourceMut, PlineVertex, Polyline,
 };
-use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
+use cavalier_contours::shape_algorithms::Shape;
 use glam::DVec2;
 use thinplan_plan::{Adjacency, ProfileLoop};
 
@@ -443,8 +443,7 @@ impl Area {
         for (o, hs) in &self.parts {
             let mut all = vec![o.clone()];
             all.extend(hs.iter().cloned());
-            let shape = Shape::from_plines(all);
-            let off = shape.parallel_offset(d, &ShapeOffsetOptions::default());
+            let off = thinplan_pocketing::inset::inset(&all, d);
             out.parts.extend(Area::from_shape(off).parts);
         }
         out

@@ -459,7 +459,7 @@ fn geometry(
             return None;
         }
     }
-    let shape = Shape::from_plines(loops);
+    let shape = Shape::from_plines(loops.clone());
     // The clipped loops carry the overlay's rounding (well under 1e-6 mm).
     let slack = if clip.is_some() { clip_slack(r) } else { 0.0 };
     // cavalier_contours asserts (debug builds) on some degenerate
@@ -472,7 +472,17 @@ fn geometry(
                 shape.parallel_offset(r + slack + extra, &ShapeOffsetOptions::default())
             }))
             .ok()
-        })?;
+        });
+    // Loops through fillets (hundreds of tiny, nearly collinear pieces) can
+    // offset into pieces of no area: then within a simplification.
+    let sound = |s: &Shape<f64>| {
+        let mut all = s.ccw_plines.iter().chain(&s.cw_plines);
+        all.clone().next().is_some() && all.all(|p| p.polyline.area().abs() > 1e-12)
+    };
+    let centre = match centre {
+        Some(c) if sound(&c) => c,
+        _ => thinplan_pocketing::inset::inset(&loops, r + slack),
+    };
     let mut centre = Area::from_shape(centre);
     if slopes == Slopes::Swept {
         let cut = swept_cuts(f, tool, &plain, shifts.as_deref().unwrap_or_default())

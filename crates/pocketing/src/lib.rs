@@ -21,6 +21,7 @@ pub mod contour;
 pub mod engagement;
 pub mod fem;
 pub mod geom;
+pub mod inset;
 pub mod offset;
 pub mod profile;
 pub mod spiral;

@@ -1,7 +1,6 @@
 //! Conventional parallel-offset pocketing (the baseline).
 
 use cavalier_contours::polyline::{PlineSource, Polyline};
-use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 use glam::DVec2;
 
 use crate::geom::{directed_gap, dist_point_seg, sample_pline, SegIndex};
@@ -9,23 +8,22 @@ use crate::{Method, Pocket, PocketError, PocketParams, PocketPath};
 
 /// Inward offset loops of the pocket (outer shrunk, islands grown) by distance `d`.
 pub fn offset_loops(pocket: &Pocket, d: f64) -> Vec<Polyline<f64>> {
+    let keep = |p: &Polyline<f64>| p.is_closed() && p.vertex_count() >= 2 && p.area().abs() > 1e-12;
     if pocket.islands.is_empty() {
-        return pocket
-            .outer
-            .parallel_offset(d)
-            .into_iter()
-            .filter(|p| p.is_closed() && p.vertex_count() >= 2 && p.area().abs() > 1e-12)
-            .collect();
+        let plain = std::panic::catch_unwind(|| pocket.outer.parallel_offset(d)).ok();
+        if let Some(plain) = plain.filter(|l| !l.is_empty() && l.iter().all(keep)) {
+            return plain;
+        }
     }
+    // With islands, or where the plain offset failed (sections of fillets).
     let mut all = vec![pocket.outer.clone()];
     all.extend(pocket.islands.iter().cloned());
-    let shape = Shape::from_plines(all);
-    let off = shape.parallel_offset(d, &ShapeOffsetOptions::default());
+    let off = crate::inset::inset(&all, d);
     off.ccw_plines
         .into_iter()
         .chain(off.cw_plines)
         .map(|ip| ip.polyline)
-        .filter(|p| p.is_closed() && p.vertex_count() >= 2 && p.area().abs() > 1e-12)
+        .filter(keep)
         .collect()
 }
 
