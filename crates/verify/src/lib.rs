@@ -330,16 +330,24 @@ fn replay(
         },
     };
     // The grids are independent replays: each on its own thread, the
-    // results taken in the knowledge's order.
+    // results taken in the knowledge's order. Only the first undoes an
+    // operation as it fails and judges the rest without it; the others
+    // replay the program as written, so that a graze one of them alone
+    // sees (a plunge just over its limit) adds that problem, not every
+    // one its undoing would then cause further on.
     let sims: Vec<Result<thinplan_stocksim::Simulation, String>> = std::thread::scope(|scope| {
         let runs: Vec<_> = cfg
             .grid_shifts
             .iter()
-            .map(|&shift| {
-                let cfg = SimConfig {
+            .enumerate()
+            .map(|(g, &shift)| {
+                let mut cfg = SimConfig {
                     grid_shift: shift,
                     ..sim_cfg.clone()
                 };
+                if g > 0 {
+                    cfg.checks.operations.clear();
+                }
                 let (program, table) = (&program, &table);
                 scope.spawn(move || simulate(brep, program, table, &cfg).map_err(|e| e.to_string()))
             })
