@@ -471,3 +471,40 @@ fn a_d20_alone_leaves_the_pocket_corners_and_names_the_tool_they_need() {
     let bad = unsafe_by_checker(r);
     assert!(bad.is_empty(), "{bad:?}");
 }
+
+/// A pocket frame whose floor slab is a section through filleted corners:
+/// its offsets used to fall apart (pieces of no area), so its bottom layer
+/// found no room to ramp in, and stage 7 refused the slab and, with it, the
+/// four below it (3,100 mm³ left by the checker's count). Now stage 7
+/// refuses no feature, and the program is safe by the checker.
+#[test]
+fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
+    let py = python();
+    let corpus = corpus(&py);
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("corpus-fillet-slab");
+    let _ = std::fs::remove_dir_all(&out);
+    std::fs::create_dir_all(&out).unwrap();
+    let name = "pocket_frame_09";
+    let step = corpus.join(format!("{name}.step"));
+    let p = plan(step.to_str().unwrap(), name, &out);
+    assert!(p.program, "{name}: no program, exit {}", p.code);
+    let saved: Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join(format!("{name}.plan.json"))).unwrap(),
+    )
+    .unwrap();
+    let refused: Vec<&str> = saved["refusals"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["rule"] == "operations.feature")
+        .map(|r| r["reason"].as_str().unwrap_or_default())
+        .collect();
+    assert!(refused.is_empty(), "{name}: {refused:#?}");
+    let lib = repo().join(format!(
+        "knowledge/tools/{}.ron",
+        thinplan_knowledge::DEFAULT_TOOL_SET
+    ));
+    let checked = check(&py, &out, &corpus, &lib);
+    let failures = judge(&[p], &checked);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

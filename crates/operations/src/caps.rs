@@ -212,16 +212,42 @@ fn plausible(o: &Polyline<f64>, x: &Polyline<f64>, pos: &[Polyline<f64>]) -> boo
     let (po, px) = (Probe::new(o), Probe::new(x));
     let pp: Vec<Probe> = pos.iter().map(Probe::new).collect();
     let vertex = |v: PlineVertex<f64>| DVec2::new(v.x, v.y);
-    let kept = o
-        .iter_vertexes()
-        .map(vertex)
-        .all(|p| px.covers(p) || pp.iter().any(|q| q.covers(p)));
-    kept && pos
+    // Every vertex near the cut, and a sample of the others: a region of
+    // thousands of vertices (sections through fillets) met by hundreds of
+    // cuts made this check quadratic, and its failures are gross.
+    let tested = |pts: Vec<DVec2>| -> Vec<DVec2> {
+        let stride = (pts.len() / PLAUSIBLE_SAMPLE).max(1);
+        pts.iter()
+            .enumerate()
+            .filter(|(i, p)| px.in_box(**p) || i % stride == 0)
+            .map(|(_, p)| *p)
+            .collect()
+    };
+    // A vertex both loops share is on both: only the others are tested
+    // against the whole loop.
+    let key = |p: &DVec2| (p.x.to_bits(), p.y.to_bits());
+    let of_o: std::collections::HashSet<(u64, u64)> =
+        o.iter_vertexes().map(|v| key(&vertex(v))).collect();
+    let of_pos: std::collections::HashSet<(u64, u64)> = pos
         .iter()
         .flat_map(|q| q.iter_vertexes())
-        .map(vertex)
-        .all(|p| !px.strictly_inside(p) && po.covers(p))
+        .map(|v| key(&vertex(v)))
+        .collect();
+    let kept = tested(o.iter_vertexes().map(vertex).collect())
+        .into_iter()
+        .all(|p| of_pos.contains(&key(&p)) || px.covers(p) || pp.iter().any(|q| q.covers(p)));
+    kept && tested(
+        pos.iter()
+            .flat_map(|q| q.iter_vertexes())
+            .map(vertex)
+            .collect(),
+    )
+    .into_iter()
+    .all(|p| !px.strictly_inside(p) && (of_o.contains(&key(&p)) || po.covers(p)))
 }
+
+/// Vertices away from a cut that `plausible` tests, at most about.
+const PLAUSIBLE_SAMPLE: usize = 64;
 
 /// `o` less `x` by the polyline boolean, each result checked
 /// (`plausible`): the boolean fails now and then where the loops graze
