@@ -475,12 +475,8 @@ fn geometry(
         });
     // Loops through fillets (hundreds of tiny, nearly collinear pieces) can
     // offset into pieces of no area: then within a simplification.
-    let sound = |s: &Shape<f64>| {
-        let mut all = s.ccw_plines.iter().chain(&s.cw_plines);
-        all.clone().next().is_some() && all.all(|p| p.polyline.area().abs() > 1e-12)
-    };
     let centre = match centre {
-        Some(c) if sound(&c) => c,
+        Some(c) if thinplan_pocketing::inset::sound(&c) => c,
         _ => thinplan_pocketing::inset::inset(&loops, r + slack),
     };
     let mut centre = Area::from_shape(centre);

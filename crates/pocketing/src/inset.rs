@@ -43,7 +43,7 @@ pub fn inset(loops: &[Polyline<f64>], d: f64) -> Shape<f64> {
 
 /// A result to keep: some loop, and none without area (the pieces a failed
 /// join leaves).
-fn sound(s: &Shape<f64>) -> bool {
+pub fn sound(s: &Shape<f64>) -> bool {
     let all = || s.ccw_plines.iter().chain(&s.cw_plines);
     all().next().is_some() && all().all(|p| p.polyline.area().abs() > 1e-12)
 }
