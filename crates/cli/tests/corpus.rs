@@ -42,6 +42,22 @@ fn shared() -> PathBuf {
     PathBuf::from("/work/shared")
 }
 
+/// An empty directory `name` in the target's temporary directory.
+fn fresh(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The default tool set's file, which the checker reads the tools from.
+fn default_tool_lib() -> PathBuf {
+    repo().join(format!(
+        "knowledge/tools/{}.ron",
+        thinplan_knowledge::DEFAULT_TOOL_SET
+    ))
+}
+
 fn sh(cmd: &mut Command, what: &str) -> String {
     let out = cmd
         .output()
@@ -326,9 +342,7 @@ fn plan_all(jobs: &[(String, String)], out: &Path) -> Vec<Planned> {
 fn corpus_programs_are_safe_or_not_written() {
     let py = python();
     let corpus = corpus(&py);
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("corpus-plans");
-    let _ = std::fs::remove_dir_all(&out);
-    std::fs::create_dir_all(&out).unwrap();
+    let out = fresh("corpus-plans");
     let jobs: Vec<(String, String)> = selection(&corpus)
         .into_iter()
         .map(|n| {
@@ -342,10 +356,7 @@ fn corpus_programs_are_safe_or_not_written() {
         })
         .collect();
     let planned = plan_all(&jobs, &out);
-    let lib = repo().join(format!(
-        "knowledge/tools/{}.ron",
-        thinplan_knowledge::DEFAULT_TOOL_SET
-    ));
+    let lib = default_tool_lib();
     let checked = check(&py, &out, &corpus, &lib);
     let failures = judge(&planned, &checked);
     eprintln!("corpus: {}", summary(&planned));
@@ -355,9 +366,7 @@ fn corpus_programs_are_safe_or_not_written() {
 #[test]
 fn bundled_samples_are_safe_or_not_written() {
     let py = python();
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-plans");
-    let _ = std::fs::remove_dir_all(&out);
-    std::fs::create_dir_all(&out).unwrap();
+    let out = fresh("sample-plans");
     let mut jobs = Vec::new();
     for (n, _) in thinplan_import::SAMPLES {
         let step = out.join(format!("{n}.step"));
@@ -370,10 +379,7 @@ fn bundled_samples_are_safe_or_not_written() {
         jobs.push((format!("builtin:{n}"), n.to_string()));
     }
     let planned = plan_all(&jobs, &out);
-    let lib = repo().join(format!(
-        "knowledge/tools/{}.ron",
-        thinplan_knowledge::DEFAULT_TOOL_SET
-    ));
+    let lib = default_tool_lib();
     let checked = check(&py, &out, &out, &lib);
     let failures = judge(&planned, &checked);
     eprintln!("samples: {}", summary(&planned));
@@ -481,9 +487,7 @@ fn a_d20_alone_leaves_the_pocket_corners_and_names_the_tool_they_need() {
 fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
     let py = python();
     let corpus = corpus(&py);
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("corpus-fillet-slab");
-    let _ = std::fs::remove_dir_all(&out);
-    std::fs::create_dir_all(&out).unwrap();
+    let out = fresh("corpus-fillet-slab");
     let name = "pocket_frame_09";
     let step = corpus.join(format!("{name}.step"));
     let p = plan(step.to_str().unwrap(), name, &out);
@@ -500,10 +504,7 @@ fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
         .map(|r| r["reason"].as_str().unwrap_or_default())
         .collect();
     assert!(refused.is_empty(), "{name}: {refused:#?}");
-    let lib = repo().join(format!(
-        "knowledge/tools/{}.ron",
-        thinplan_knowledge::DEFAULT_TOOL_SET
-    ));
+    let lib = default_tool_lib();
     let checked = check(&py, &out, &corpus, &lib);
     let failures = judge(&[p], &checked);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
