@@ -28,7 +28,8 @@ const BUCKET: f64 = 5.0;
 pub(crate) struct Coverage {
     view: View,
     /// (from, to, highest tip, disc radius)
-    segs: Vec<(DVec2, DVec2, f64, f64)>,
+    /// (from, to, height, radius, flute length)
+    segs: Vec<(DVec2, DVec2, f64, f64, f64)>,
     grid: BTreeMap<(i64, i64), Vec<usize>>,
 }
 
@@ -51,11 +52,9 @@ impl Coverage {
             grid: BTreeMap::new(),
         };
         for o in ops {
-            let r = tools
-                .tools
-                .iter()
-                .find(|t| t.id == o.tool)
-                .map_or(0.0, |t| 0.5 * t.diameter);
+            let t = tools.tools.iter().find(|t| t.id == o.tool);
+            let r = t.map_or(0.0, |t| 0.5 * t.diameter);
+            let flute = t.map_or(0.0, |t| t.flute_length);
             let mut from = o.start;
             for m in &o.moves {
                 if m.region != Region3::Rapid {
@@ -68,7 +67,7 @@ impl Coverage {
                         };
                         (view.xy(arc.centre), ccw)
                     });
-                    cov.push_move(view.xy(from), view.xy(m.to), arc, z, r);
+                    cov.push_move(view.xy(from), view.xy(m.to), arc, z, (r, flute));
                 }
                 from = m.to;
             }
@@ -78,18 +77,18 @@ impl Coverage {
 
     /// The cutting moves of operations in a feature's local frame (plan
     /// view along its z), each with its tool's radius.
-    pub(crate) fn local<'a>(ops: impl IntoIterator<Item = (&'a [LMove], DVec3, f64)>) -> Self {
+    pub(crate) fn local<'a>(ops: impl IntoIterator<Item = (&'a [LMove], DVec3, f64, f64)>) -> Self {
         let mut cov = Coverage {
             view: View::new(DVec3::Z),
             segs: Vec::new(),
             grid: BTreeMap::new(),
         };
-        for (moves, start, r) in ops {
+        for (moves, start, r, flute) in ops {
             let mut from = start;
             for m in moves {
                 if m.kind != Kind::Rapid {
                     let z = from.z.max(m.to.z);
-                    cov.push_move(from.truncate(), m.to.truncate(), m.arc, z, r);
+                    cov.push_move(from.truncate(), m.to.truncate(), m.arc, z, (r, flute));
                 }
                 from = m.to;
             }
@@ -99,12 +98,19 @@ impl Coverage {
 
     /// A line from `a` to `b`, or an arc about `arc.0` (counter-clockwise
     /// when `arc.1`), in plan view, its tip at most at `z`.
-    fn push_move(&mut self, a: DVec2, b: DVec2, arc: Option<(DVec2, bool)>, z: f64, r: f64) {
+    fn push_move(
+        &mut self,
+        a: DVec2,
+        b: DVec2,
+        arc: Option<(DVec2, bool)>,
+        z: f64,
+        (r, flute): (f64, f64),
+    ) {
         if r <= 0.0 {
             return;
         }
         match arc {
-            None => self.push(a, b, z, r),
+            None => self.push(a, b, z, (r, flute)),
             Some((c, ccw)) => {
                 let ra = a.distance(c);
                 let sweep = arc_sweep(a, b, c, ccw);
@@ -123,14 +129,14 @@ impl Coverage {
                     } else {
                         c + ra * DVec2::from_angle(a0 + sweep * j as f64 / k as f64)
                     };
-                    self.push(p, q, z, r - SAGITTA);
+                    self.push(p, q, z, (r - SAGITTA, flute));
                     p = q;
                 }
             }
         }
     }
 
-    fn push(&mut self, a: DVec2, b: DVec2, z: f64, r: f64) {
+    fn push(&mut self, a: DVec2, b: DVec2, z: f64, (r, flute): (f64, f64)) {
         if r <= 0.0 {
             return;
         }
@@ -143,18 +149,21 @@ impl Coverage {
                 self.grid.entry((i, j)).or_default().push(self.segs.len());
             }
         }
-        self.segs.push((a, b, z, r));
+        self.segs.push((a, b, z, r, flute));
     }
 
     /// Whether a disc of radius `r` about `p` (part coordinates, the tip at
     /// `p`'s height) lies within `slack` inside the disc of a move whose
-    /// tip ran no higher.
+    /// tip ran no higher and whose flutes reached that height (above them
+    /// the shank would have met the material, not cut it).
     pub(crate) fn covers(&self, p: DVec3, r: f64, slack: f64) -> bool {
         let (c, z) = (self.view.xy(p), self.view.z(p));
         self.grid.get(&key(c)).is_some_and(|list| {
             list.iter().any(|&q| {
-                let (p0, p1, zq, rq) = self.segs[q];
-                zq <= z + 1e-6 && dist_point_seg(c, p0, p1) <= rq - r + slack
+                let (p0, p1, zq, rq, flute) = self.segs[q];
+                zq <= z + 1e-6
+                    && z <= zq + flute + 1e-6
+                    && dist_point_seg(c, p0, p1) <= rq - r + slack
             })
         })
     }
@@ -217,9 +226,13 @@ mod tests {
         assert!(cov.covers(DVec3::new(25.0, rq - r + 0.05, 5.0), r, 0.1));
         assert!(!cov.covers(DVec3::new(25.0, rq - r + 0.2, 5.0), r, 0.1));
         assert!(!cov.covers(DVec3::new(-rq, 0.0, 5.0), r, 0.0));
-        // a disc below the pass is not covered; above it is
+        // a disc below the pass is not covered; above it is, as far as
+        // the flutes reach, and no further: there the shank met it
         assert!(!cov.covers(DVec3::new(25.0, 0.0, 4.0), r, 0.0));
         assert!(cov.covers(DVec3::new(25.0, 0.0, 6.0), r, 0.0));
+        let top = 5.0 + big.flute_length;
+        assert!(cov.covers(DVec3::new(25.0, 0.0, top - 0.01), r, 0.0));
+        assert!(!cov.covers(DVec3::new(25.0, 0.0, top + 0.01), r, 0.0));
     }
 
     #[test]
