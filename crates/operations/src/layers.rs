@@ -1243,6 +1243,59 @@ fn arc_ok(from: DVec2, s: &Seg2, g: &Geometry, cleared: &[Vec<DVec2>]) -> bool {
         .all(|p| inside(*p, cleared) && product_distance(*p, &g.product) >= g.r - EPS)
 }
 
+/// A pass with no room for a run-up whose start lies where the tool before
+/// it did not cut (a rest pass starting in the corner that tool could not
+/// reach): it goes down beside it, at the nearest point of `room`, and
+/// comes in sideways along a straight line that keeps `r` from the
+/// product, rather than plunging into the corner's material.
+fn entered_from_room(mut p: BoundaryPass, g: &Geometry, room: &[Vec<DVec2>]) -> BoundaryPass {
+    if p.lead_in != "none" || inside(p.start, room) {
+        return p;
+    }
+    let Some(q) = nearest_inside(p.start, room) else {
+        return p;
+    };
+    let seg = Seg2 {
+        to: p.start,
+        arc: None,
+    };
+    if seg_points(q, &seg, STEP / 4.0)
+        .iter()
+        .all(|x| product_distance(*x, &g.product) >= g.r - EPS)
+    {
+        p.segs.insert(0, seg);
+        p.start = q;
+        p.lead_in = "from-cleared-side";
+    }
+    p
+}
+
+/// The point of `polys` nearest `p` from outside, a hair inside them.
+fn nearest_inside(p: DVec2, polys: &[Vec<DVec2>]) -> Option<DVec2> {
+    const HAIR: f64 = 1e-3;
+    let mut best: Option<(f64, DVec2)> = None;
+    for pts in polys {
+        let n = pts.len();
+        for i in 0..n {
+            let (a, b) = (pts[i], pts[(i + 1) % n]);
+            let ab = b - a;
+            let t = if ab.length_squared() > 0.0 {
+                ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let c = a + ab * t;
+            let d = c.distance(p);
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, c));
+            }
+        }
+    }
+    let (_, c) = best?;
+    let q = c + (c - p).normalize_or_zero() * HAIR;
+    inside(q, polys).then_some(q)
+}
+
 fn boundary_pass(
     chain: &[Edge2],
     g: &Geometry,
@@ -2560,15 +2613,18 @@ fn plan_band_with<'a>(
     // What this feature's own passes cut, to find the wall stretches they
     // left (the centre region alone overstates it where it is too narrow
     // for a pass).
-    let own_cuts = crate::coverage::Coverage::local(ops.iter().map(|o| {
-        let r = env
-            .tools
-            .tools
-            .iter()
-            .find(|t| t.id == o.tool)
-            .map_or(0.0, |t| 0.5 * t.diameter);
-        (o.moves.as_slice(), o.start, r)
-    }));
+    let cuts_of = |ops: &[LocalOp]| {
+        crate::coverage::Coverage::local(ops.iter().map(|o| {
+            let t = env.tools.tools.iter().find(|t| t.id == o.tool);
+            (
+                o.moves.as_slice(),
+                o.start,
+                t.map_or(0.0, |t| 0.5 * t.diameter),
+                t.map_or(0.0, |t| t.flute_length),
+            )
+        }))
+    };
+    let own_cuts = cuts_of(&ops);
     let ctx = RestCtx {
         f,
         m,
@@ -2578,6 +2634,7 @@ fn plan_band_with<'a>(
         own_cuts: &own_cuts,
         tool,
         g: &g,
+        after: None,
         z_min,
         z_top,
         levels: &wall_levels,
@@ -2602,17 +2659,41 @@ fn plan_band_with<'a>(
             reach: g.centre_polys.clone(),
         });
     }
-    // The wall rest pass: stretches of product wall this tool could not
-    // come beside, finished by a smaller tool right after it.
+    // The wall rest passes: stretches of product wall this tool could not
+    // come beside, finished by the next smaller tool right after it, and
+    // what that one left by the next smaller again (a corner between two
+    // walls stops each tool at its own radius from the crossing wall).
     if let Some(w) = m
         .wall_rest
         .as_ref()
         .filter(|_| !ops.is_empty() && !g.product.is_empty())
     {
-        match rest_pass(&ctx, Rest::Wall(w)) {
-            Ok(Some(op)) => ops.push(op),
-            Ok(None) => {}
-            Err(e) => warnings.push(format!("{}: no wall rest pass: {e}", f.id)),
+        let mut after: Option<(&Tool, Geometry)> = None;
+        loop {
+            let own_cuts = cuts_of(&ops);
+            let c = RestCtx {
+                own_cuts: &own_cuts,
+                after: after.as_ref().map(|(t, g)| (*t, g)),
+                ..ctx.clone_shallow()
+            };
+            match rest_pass(&c, Rest::Wall(w)) {
+                Ok(Some(op)) => {
+                    let small = env.tools.tools.iter().find(|t| t.id == op.tool);
+                    let next = small
+                        .filter(|t| t.diameter < after.as_ref().map_or(tool, |a| a.0).diameter)
+                        .and_then(|t| c.geometry(t).map(|g2| (t, g2)));
+                    ops.push(op);
+                    match next {
+                        Some(n) => after = Some(n),
+                        None => break,
+                    }
+                }
+                Ok(None) => break,
+                Err(e) => {
+                    warnings.push(format!("{}: no wall rest pass: {e}", f.id));
+                    break;
+                }
+            }
         }
     }
     // The rest pass: the fillet this tool's corner radius leaves along the
@@ -2721,6 +2802,9 @@ struct RestCtx<'a> {
     /// The feature's tool and its geometry.
     tool: &'a Tool,
     g: &'a Geometry,
+    /// The tool of the last wall rest pass and its geometry: the next one
+    /// finishes what it left, with a smaller tool.
+    after: Option<(&'a Tool, &'a Geometry)>,
     z_min: f64,
     z_top: f64,
     /// The levels of the feature's passes, top down, the floor last.
@@ -2732,7 +2816,15 @@ struct RestCtx<'a> {
     geometries: std::cell::RefCell<BTreeMap<String, Option<Geometry>>>,
 }
 
-impl RestCtx<'_> {
+impl<'a> RestCtx<'a> {
+    /// The same context without the geometry cache.
+    fn clone_shallow(&self) -> RestCtx<'a> {
+        RestCtx {
+            geometries: Default::default(),
+            ..*self
+        }
+    }
+
     fn geometry(&self, t: &Tool) -> Option<Geometry> {
         self.geometries
             .borrow_mut()
@@ -2807,7 +2899,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
                 t.corner_radius <= main.corner_radius - rp.min_corner_gain + 1e-12
                     && t.diameter <= main.diameter
             }
-            Rest::Wall(_) => t.diameter < main.diameter - 1e-9,
+            Rest::Wall(_) => t.diameter < c.after.map_or(main, |a| a.0).diameter - 1e-9,
             Rest::Orphan(..) => true,
         })
         .collect();
@@ -2851,7 +2943,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             .iter()
             .find_map(|t| c.geometry(t).map(|g| (*t, g, false)))
             .or_else(|| match rest {
-                Rest::Wall(w) if w.run_last && cands.is_empty() => {
+                Rest::Wall(w) if w.run_last && cands.is_empty() && c.after.is_none() => {
                     opened(main).map(|g| (main, g, true))
                 }
                 _ => None,
@@ -2885,8 +2977,10 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     let (beside, want_inside, run_up) = match rest {
         Rest::Floor(rp) => (cleared.clone(), true, rp.run_up),
         Rest::Wall(w) => (
-            c.g.centre
-                .offset(-(c.g.r - g2.r + w.min_left))
+            c.after
+                .map_or(c.g, |a| a.1)
+                .centre
+                .offset(-(c.after.map_or(c.g, |a| a.1).r - g2.r + w.min_left))
                 .polygons(STEP),
             false,
             w.run_up,
@@ -2990,7 +3084,8 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             if len < STEP {
                 continue;
             }
-            passes.push(boundary_pass(&part, &g2, run_up, d2, &room, mk));
+            let pass = boundary_pass(&part, &g2, run_up, d2, &room, mk);
+            passes.push(entered_from_room(pass, &g2, &room));
         }
     }
     if passes.is_empty() {
@@ -3065,8 +3160,8 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
             prov.note = format!(
                 "pattern=RestPass; layer=walls; wall stretches {} (D {:.1} mm) left more than \
                  {:.2} mm on, finished by {} (D {:.1} mm) at {} levels",
-                main.id,
-                main.diameter,
+                c.after.map_or(main, |a| a.0).id,
+                c.after.map_or(main, |a| a.0).diameter,
                 w.min_left,
                 small.id,
                 small.diameter,
