@@ -509,3 +509,29 @@ fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
     let failures = judge(&[p], &checked);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// An egg crate whose ribs cross in filleted corners: the Ø20 stops 10 mm
+/// from the crossing rib, its wall rest Ø16 at 8 mm, and the corner's own
+/// Ø8 at the fillet's end, so a sliver a tenth of a millimetre thick stood
+/// the ribs' full height along each face between them, and the long tools
+/// at the floor met it with their shanks (the second replay grid saw it:
+/// an unsafe verdict, no program). The wall rest passes now go on with
+/// smaller tools until the wall is finished, and a pass that starts in a
+/// corner the tool before it left comes in from the side: a program, no
+/// problem of stage 9's, and none by the checker.
+#[test]
+fn ribs_crossing_in_filleted_corners_are_finished_by_smaller_tools_in_turn() {
+    let py = python();
+    let corpus = corpus(&py);
+    let out = fresh("corpus-rib-crossings");
+    let name = "egg_crate_03";
+    let step = corpus.join(format!("{name}.step"));
+    let p = plan(step.to_str().unwrap(), name, &out);
+    assert!(p.program, "{name}: no program, exit {}", p.code);
+    let problems = p.report["verification"]["problems"].as_array().unwrap();
+    assert!(problems.is_empty(), "{name}: {problems:#?}");
+    let lib = default_tool_lib();
+    let checked = check(&py, &out, &corpus, &lib);
+    let failures = judge(&[p], &checked);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
