@@ -28,6 +28,7 @@ use thinplan_plan::{
     StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
 };
 
+mod beyond;
 pub mod section;
 mod shank;
 use section::{LocalMesh, Shapes};
@@ -548,7 +549,7 @@ fn edge_slopes(
             sections.entry(z.to_bits()).or_insert_with(|| {
                 let (loops, _) = local.section(*z);
                 let part = section::fill(&loops);
-                (loops, part)
+                beyond::Section::new(loops, part)
             });
         }
     }
@@ -576,8 +577,7 @@ fn edge_slopes(
                         if k == 1 {
                             return 0.0;
                         }
-                        let (loops, part) = &sections[&z.to_bits()];
-                        let v = face_beyond(loops, part, p, nrm, reach);
+                        let v = beyond::face_beyond(&sections[&z.to_bits()], p, nrm, reach);
                         // Rounded: the plan file stays readable.
                         let v = (v * 1e9).round() / 1e9;
                         if v.abs() < 1e-6 {
@@ -609,66 +609,10 @@ fn edge_slopes(
 }
 
 /// The part's sections by height (bits): the loops and their region.
-type SectionCache = BTreeMap<u64, (Vec<Vec<[f64; 2]>>, Shapes)>;
+type SectionCache = BTreeMap<u64, beyond::Section>;
 
 /// How far inside a slab its bounds' sections are taken (mm).
 const EPS_SECTION: f64 = 1e-4;
-
-/// Where the part's section boundary crosses the line through `p` along
-/// the unit normal `n` (towards the product): the signed distance along
-/// `n` of the crossing nearest `p` on the side the face lies (towards the
-/// region where `p` is in the product, else towards the product). Where
-/// the line meets none: the product covers the whole reach (`-reach`), or
-/// the nearest product in any direction (`reach` where there is none).
-fn face_beyond(
-    loops: &[Vec<[f64; 2]>],
-    part: &Shapes,
-    p: [f64; 2],
-    n: [f64; 2],
-    reach: f64,
-) -> f64 {
-    let inside = section::contains(part, p);
-    let dir = if inside { [-n[0], -n[1]] } else { n };
-    let mut best = f64::INFINITY;
-    for c in loops {
-        let m = c.len();
-        for i in 0..m {
-            let (a, b) = (c[i], c[(i + 1) % m]);
-            let e = [b[0] - a[0], b[1] - a[1]];
-            let den = dir[0] * e[1] - dir[1] * e[0];
-            if den.abs() < 1e-15 {
-                continue;
-            }
-            let w = [a[0] - p[0], a[1] - p[1]];
-            let t = (w[0] * e[1] - w[1] * e[0]) / den;
-            let u = (w[0] * dir[1] - w[1] * dir[0]) / den;
-            if t >= 0.0 && (0.0..=1.0).contains(&u) && t < best {
-                best = t;
-            }
-        }
-    }
-    match (best <= reach, inside) {
-        (true, true) => -best,
-        (true, false) => best,
-        (false, true) => -reach,
-        (false, false) => loops
-            .iter()
-            .flat_map(|c| (0..c.len()).map(move |i| seg_distance(p, c[i], c[(i + 1) % c.len()])))
-            .fold(reach, f64::min),
-    }
-}
-
-fn seg_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
-    let l2 = ab[0] * ab[0] + ab[1] * ab[1];
-    let t = if l2 > 0.0 {
-        ((ap[0] * ab[0] + ap[1] * ab[1]) / l2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let d = [ap[0] - ab[0] * t, ap[1] - ab[1] * t];
-    (d[0] * d[0] + d[1] * d[1]).sqrt()
-}
 
 /// The plan-view geometry of a resolved feature.
 struct Geo {
