@@ -30,7 +30,12 @@ pub fn order(plan: &Plan, k: &Knowledge) -> Result<Vec<OperationId>, OrderError>
     if !plan.stages_done.contains(&Stage::Operations) {
         return Err(OrderError::MissingStage(Stage::Operations));
     }
-    order_with_edges(plan, &crate::precedence::stage8_edges(plan, k))
+    // A rest pass runs before what is cut below it within reach of the
+    // set's largest tool.
+    let reach = k.tool_set(&plan.setup.tool_set).map_or(0.0, |set| {
+        set.tools.iter().map(|t| t.diameter).fold(0.0, f64::max)
+    });
+    order_with_edges(plan, &crate::precedence::stage8_edges(plan, k), reach)
 }
 
 /// Fills `plan.operation_order` and records stage 8.
@@ -55,15 +60,19 @@ fn find(
     r
 }
 
-/// Stage 8 without the stage check and without shank edges.
+/// Stage 8 without the stage check, without shank edges, and with rest
+/// passes before features below them only where their plan boxes overlap.
 pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
-    order_with_edges(plan, &[])
+    order_with_edges(plan, &[], 0.0)
 }
 
-/// Stage 8 with extra `Before` edges between features.
-pub fn order_with_edges(
+/// Stage 8 with extra `Before` edges between features; `reach`: how far
+/// apart in plan a feature below a rest pass's may lie and still come first
+/// (`rest_before_below`).
+fn order_with_edges(
     plan: &Plan,
     extra: &[(MachiningFeatureId, MachiningFeatureId)],
+    reach: f64,
 ) -> Result<Vec<OperationId>, OrderError> {
     // Features that have operations, and their operations in stage-7 order.
     let mut ops_of: BTreeMap<MachiningFeatureId, Vec<usize>> = BTreeMap::new();
@@ -179,7 +188,9 @@ pub fn order_with_edges(
     }
     // Rest passes last, by tool, in their features' order: each only
     // finishes its own feature's floor or wall stretches (after its other
-    // operations), and one tool change serves them all.
+    // operations), and one tool change serves them all. But not after an
+    // operation below it: that tool's shank passes up through the corners
+    // the rest pass has still to cut (`rest_before_below`).
     let feature_of: BTreeMap<OperationId, MachiningFeatureId> =
         plan.operations.iter().map(|o| (o.id, o.feature)).collect();
     let place: BTreeMap<MachiningFeatureId, usize> = out
@@ -188,13 +199,73 @@ pub fn order_with_edges(
         .rev()
         .map(|(k, id)| (feature_of[id], k))
         .collect();
-    let mut rest: Vec<usize> = (0..plan.operations.len())
+    let mut rest: Vec<(usize, usize)> = (0..plan.operations.len())
         .filter(|i| is_rest_pass(*i))
+        .map(|i| {
+            (
+                rest_before_below(plan, (&out, &feature_of, &place), reach, i),
+                i,
+            )
+        })
         .collect();
-    rest.sort_by_key(|i| {
-        let o = &plan.operations[*i];
-        (o.tool.clone(), place.get(&o.feature).copied(), *i)
+    rest.sort_by_key(|&(at, i)| {
+        let o = &plan.operations[i];
+        (at, o.tool.clone(), place.get(&o.feature).copied(), i)
     });
-    out.extend(rest.into_iter().map(|i| plan.operations[i].id));
-    Ok(out)
+    let mut merged = Vec::with_capacity(out.len() + rest.len());
+    let mut rest = rest.into_iter().peekable();
+    for (k, id) in out.into_iter().enumerate() {
+        while let Some((_, i)) = rest.next_if(|&(at, _)| at <= k) {
+            merged.push(plan.operations[i].id);
+        }
+        merged.push(id);
+    }
+    merged.extend(rest.map(|(_, i)| plan.operations[i].id));
+    Ok(merged)
+}
+
+/// Where in `out` (an index: before that operation; `out.len()`: at the
+/// end) the rest pass `plan.operations[i]` runs: after its own feature, and
+/// before the first operation after it whose feature lies below it (its top
+/// no higher than the rest pass's feature's floor, their plan boxes within
+/// `reach` of each other, both cut along +Z). A
+/// pass planned with every other feature gone (orphan stretches, the
+/// feature's own tool with every edge open) runs at the end.
+fn rest_before_below(
+    plan: &Plan,
+    (out, feature_of, place): (
+        &[OperationId],
+        &BTreeMap<OperationId, MachiningFeatureId>,
+        &BTreeMap<MachiningFeatureId, usize>,
+    ),
+    margin: f64,
+    i: usize,
+) -> usize {
+    let o = &plan.operations[i];
+    let v = &o.provenance.values;
+    if v.contains_key(crate::layers::ORPHAN) || v.get("after_every_feature") == Some(&1.0) {
+        return out.len();
+    }
+    let feats = &plan.machining_features;
+    let along_z =
+        |f: &thinplan_plan::MachiningFeature| (f.shape.frame.z - DVec3::Z).length() < 1e-9;
+    let (Some(f), Some(&after)) = (feats.get(o.feature.0 as usize), place.get(&o.feature)) else {
+        return out.len();
+    };
+    if !along_z(f) {
+        return out.len();
+    }
+    let fb = f.plan_box();
+    let below = |g: &thinplan_plan::MachiningFeature| {
+        let gb = g.plan_box();
+        along_z(g)
+            && g.shape.z_max <= f.shape.z_min + 1e-6
+            && gb[0] <= fb[2] + margin
+            && fb[0] <= gb[2] + margin
+            && gb[1] <= fb[3] + margin
+            && fb[1] <= gb[3] + margin
+    };
+    (after + 1..out.len())
+        .find(|&k| feats.get(feature_of[&out[k]].0 as usize).is_some_and(below))
+        .unwrap_or(out.len())
 }

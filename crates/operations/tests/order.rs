@@ -170,3 +170,56 @@ fn a_cycle_is_an_error_not_a_panic() {
         .push(constraint(1, 0, ConstraintKind::Before));
     assert!(order_unchecked(&plan).is_err());
 }
+
+/// A wall rest pass of an upper slab runs before the slab below it starts
+/// (that tool's shank passes up through the corners still to be cut); one
+/// of a slab beside no lower feature, and one planned with every other
+/// feature gone (orphan stretches), still run at the end.
+#[test]
+fn rest_passes_run_before_the_features_below_them() {
+    use Adjacency::{Feature, Open, Product};
+    let slab = |id: u32, x0: f64, z: (f64, f64)| {
+        common::feature(
+            id,
+            vec![
+                common::v(x0, 0.0),
+                common::v(x0 + 50.0, 0.0),
+                common::v(x0 + 50.0, 30.0),
+                common::v(x0, 30.0),
+            ],
+            vec![],
+            vec![Open, Open, Product, Open],
+            Feature,
+            z,
+        )
+    };
+    // 0 above 1 (same plan box); 2 far away at the height of 1
+    let mut plan = common::plan_with(vec![
+        slab(0, 0.0, (10.0, 20.0)),
+        slab(1, 0.0, (0.0, 10.0)),
+        slab(2, 500.0, (10.0, 20.0)),
+    ]);
+    plan.operations.push(op(0, 0, "A", 0.0));
+    plan.operations.push(op(1, 1, "A", 0.0));
+    plan.operations.push(op(2, 2, "A", 500.0));
+    let rest = |id: u32, feature: u32, orphan: bool| {
+        let mut o = op(id, feature, "B", 0.0);
+        o.provenance
+            .values
+            .insert(thinplan_operations::RUN_LAST.into(), 1.0);
+        if orphan {
+            o.provenance.values.insert("orphan_stretches".into(), 1.0);
+        }
+        o
+    };
+    plan.operations.push(rest(3, 0, false));
+    plan.operations.push(rest(4, 0, true));
+    plan.operations.push(rest(5, 2, false));
+    plan.machining_constraints
+        .push(constraint(0, 1, ConstraintKind::Before));
+    let order = order_unchecked(&plan).unwrap();
+    let at = |id: u32| order.iter().position(|o| o.0 == id).unwrap();
+    assert!(at(0) < at(3) && at(3) < at(1), "{order:?}");
+    assert!(at(4) > at(1) && at(4) > at(2), "{order:?}");
+    assert!(at(5) > at(1) && at(5) > at(2), "{order:?}");
+}
