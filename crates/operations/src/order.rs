@@ -31,11 +31,24 @@ pub fn order(plan: &Plan, k: &Knowledge) -> Result<Vec<OperationId>, OrderError>
         return Err(OrderError::MissingStage(Stage::Operations));
     }
     // A rest pass runs before what is cut below it within reach of the
-    // set's largest tool.
-    let reach = k.tool_set(&plan.setup.tool_set).map_or(0.0, |set| {
+    // set's largest tool, where that tool's flutes do not reach its top.
+    let set = k.tool_set(&plan.setup.tool_set);
+    let reach = set.map_or(0.0, |set| {
         set.tools.iter().map(|t| t.diameter).fold(0.0, f64::max)
     });
-    order_with_edges(plan, &crate::precedence::stage8_edges(plan, k), reach)
+    let flutes: BTreeMap<String, f64> = set
+        .map(|set| {
+            set.tools
+                .iter()
+                .map(|t| (t.id.clone(), t.flute_length))
+                .collect()
+        })
+        .unwrap_or_default();
+    order_with_edges(
+        plan,
+        &crate::precedence::stage8_edges(plan, k),
+        (reach, &flutes),
+    )
 }
 
 /// Fills `plan.operation_order` and records stage 8.
@@ -63,16 +76,17 @@ fn find(
 /// Stage 8 without the stage check, without shank edges, and with rest
 /// passes before features below them only where their plan boxes overlap.
 pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
-    order_with_edges(plan, &[], 0.0)
+    order_with_edges(plan, &[], (0.0, &BTreeMap::new()))
 }
 
 /// Stage 8 with extra `Before` edges between features; `reach`: how far
-/// apart in plan a feature below a rest pass's may lie and still come first
-/// (`rest_before_below`).
+/// apart in plan a feature below a rest pass's may lie and still come first,
+/// and the tools' flute lengths by id (`rest_before_below`; a tool not
+/// listed has none).
 fn order_with_edges(
     plan: &Plan,
     extra: &[(MachiningFeatureId, MachiningFeatureId)],
-    reach: f64,
+    (reach, flutes): (f64, &BTreeMap<String, f64>),
 ) -> Result<Vec<OperationId>, OrderError> {
     // Features that have operations, and their operations in stage-7 order.
     let mut ops_of: BTreeMap<MachiningFeatureId, Vec<usize>> = BTreeMap::new();
@@ -199,13 +213,19 @@ fn order_with_edges(
         .rev()
         .map(|(k, id)| (feature_of[id], k))
         .collect();
+    // How high above its floor each feature's shortest flutes reach (its
+    // operations in `out`).
+    let mut flute_of: BTreeMap<MachiningFeatureId, f64> = BTreeMap::new();
+    for o in plan.operations.iter().filter(|o| !crate::runs_last(o)) {
+        let l = flutes.get(&o.tool).copied().unwrap_or(0.0);
+        let e = flute_of.entry(o.feature).or_insert(l);
+        *e = e.min(l);
+    }
     let mut rest: Vec<(usize, usize)> = (0..plan.operations.len())
         .filter(|i| is_rest_pass(*i))
         .map(|i| {
-            (
-                rest_before_below(plan, (&out, &feature_of, &place), reach, i),
-                i,
-            )
+            let at = rest_before_below(plan, (&out, &feature_of, &place), (reach, &flute_of), i);
+            (at, i)
         })
         .collect();
     rest.sort_by_key(|&(at, i)| {
@@ -228,7 +248,10 @@ fn order_with_edges(
 /// end) the rest pass `plan.operations[i]` runs: after its own feature, and
 /// before the first operation after it whose feature lies below it (its top
 /// no higher than the rest pass's feature's floor, their plan boxes within
-/// `reach` of each other, both cut along +Z). A
+/// `reach` of each other, both cut along +Z) so far that its shortest
+/// flutes, at its floor, do not reach the rest pass's feature's top (there
+/// they would cut what the rest pass leaves, and above them a shank would
+/// meet it). A
 /// pass planned with every other feature gone (orphan stretches, the
 /// feature's own tool with every edge open) runs at the end.
 fn rest_before_below(
@@ -238,7 +261,7 @@ fn rest_before_below(
         &BTreeMap<OperationId, MachiningFeatureId>,
         &BTreeMap<MachiningFeatureId, usize>,
     ),
-    margin: f64,
+    (margin, flute_of): (f64, &BTreeMap<MachiningFeatureId, f64>),
     i: usize,
 ) -> usize {
     let o = &plan.operations[i];
@@ -260,6 +283,7 @@ fn rest_before_below(
         let gb = g.plan_box();
         along_z(g)
             && g.shape.z_max <= f.shape.z_min + 1e-6
+            && g.shape.z_min + flute_of.get(&g.id).copied().unwrap_or(0.0) < f.shape.z_max - 1e-6
             && gb[0] <= fb[2] + margin
             && fb[0] <= gb[2] + margin
             && gb[1] <= fb[3] + margin
