@@ -535,3 +535,42 @@ fn ribs_crossing_in_filleted_corners_are_finished_by_smaller_tools_in_turn() {
     let failures = judge(&[p], &checked);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A wing rib whose flange-side levels plunge 4 mm at a corner: the first
+/// replay undoes those operations, so the floor pass after them met their
+/// uncut stock with a rapid and was removed, and a 0.5 mm strip of floor
+/// stayed. The levels are planned again with ramps and the floor pass is
+/// judged again on the stock they now cut: nothing is removed, and the
+/// checker finds no missed material.
+#[test]
+fn a_later_operation_is_judged_again_after_the_ones_before_it_are_planned_again() {
+    let py = python();
+    let corpus = corpus(&py);
+    let out = fresh("corpus-judged-again");
+    let name = "wing_rib_09";
+    let step = corpus.join(format!("{name}.step"));
+    let p = plan(step.to_str().unwrap(), name, &out);
+    assert!(p.program, "{name}: no program, exit {}", p.code);
+    let v = &p.report["verification"];
+    let ramped = v["replanned"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["how"] == "ramped_entries")
+        .count();
+    assert!(ramped > 0, "{name}: nothing planned again: {v:#}");
+    let removed = v["removed"].as_array().unwrap();
+    assert!(removed.is_empty(), "{name}: {removed:#?}");
+    let lib = default_tool_lib();
+    let checked = check(&py, &out, &corpus, &lib);
+    let failures = judge(std::slice::from_ref(&p), &checked);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let missed = checked[name]
+        .pointer("/missed/volume")
+        .and_then(Value::as_f64)
+        .unwrap();
+    assert!(
+        missed <= 1.0,
+        "{name}: the checker finds {missed:.2} mm3 missed"
+    );
+}

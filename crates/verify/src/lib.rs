@@ -75,6 +75,13 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         let mut culprits: Vec<(OperationId, Problem)> = culprits.into_iter().collect();
         let at = |op: &OperationId| plan.operation_order.iter().position(|o| o == op);
         culprits.sort_by_key(|(op, _)| at(op));
+        // The first replay judges each operation on the stock the failing
+        // ones before it left standing (it undoes them), so a later
+        // operation's problem may be only theirs: once an earlier one is
+        // planned again or taken out, a later one is judged again in the
+        // next replay before it is moved or removed, while rounds remain
+        // to confirm that.
+        let mut earlier_changed = false;
         for (op, problem) in culprits {
             let kind = problem.kind;
             // A plunge stage 8 took for air: planned again once, every
@@ -99,8 +106,12 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
                         round: rounds,
                         planned,
                     });
+                    earlier_changed = true;
                     continue;
                 }
+            }
+            if earlier_changed && rounds + 2 <= cfg.max_rounds {
+                continue;
             }
             // Material that still stood (or a plunge no ramp fits): once,
             // the operation runs last, when everything else has cut.
@@ -120,12 +131,14 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
                         round: rounds,
                         planned,
                     });
+                    earlier_changed = true;
                     continue;
                 }
             }
             let Some(operation) = remove_operation(plan, op, &mut links) else {
                 continue;
             };
+            earlier_changed = true;
             removed.push(RemovedOperation {
                 operation: op,
                 problem,
