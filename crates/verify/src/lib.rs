@@ -75,12 +75,11 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         let mut culprits: Vec<(OperationId, Problem)> = culprits.into_iter().collect();
         let at = |op: &OperationId| plan.operation_order.iter().position(|o| o == op);
         culprits.sort_by_key(|(op, _)| at(op));
-        // The first replay judges each operation on the stock the failing
-        // ones before it left standing (it undoes them), so a later
-        // operation's problem may be only theirs: once an earlier one is
-        // planned again or taken out, a later one is judged again in the
-        // next replay before it is moved or removed, while rounds remain
-        // to confirm that.
+        // The first replay undoes a failing operation but lets one that
+        // plunges cut (a ramp there takes the same material): the ones
+        // after it were judged on its cut. Once such an operation is moved
+        // or removed, a later one is judged again in the next replay before
+        // it is moved or removed, while rounds remain to confirm that.
         let mut earlier_changed = false;
         for (op, problem) in culprits {
             let kind = problem.kind;
@@ -106,7 +105,6 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
                         round: rounds,
                         planned,
                     });
-                    earlier_changed = true;
                     continue;
                 }
             }
@@ -131,14 +129,14 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
                         round: rounds,
                         planned,
                     });
-                    earlier_changed = true;
+                    earlier_changed |= kind == ProblemKind::PlungeIntoStock;
                     continue;
                 }
             }
             let Some(operation) = remove_operation(plan, op, &mut links) else {
                 continue;
             };
-            earlier_changed = true;
+            earlier_changed |= kind == ProblemKind::PlungeIntoStock;
             removed.push(RemovedOperation {
                 operation: op,
                 problem,
