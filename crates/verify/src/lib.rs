@@ -75,12 +75,6 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
         let mut culprits: Vec<(OperationId, Problem)> = culprits.into_iter().collect();
         let at = |op: &OperationId| plan.operation_order.iter().position(|o| o == op);
         culprits.sort_by_key(|(op, _)| at(op));
-        // The first replay undoes a failing operation but lets one that
-        // plunges cut (a ramp there takes the same material): the ones
-        // after it were judged on its cut. Once such an operation is moved
-        // or removed, a later one is judged again in the next replay before
-        // it is moved or removed, while rounds remain to confirm that.
-        let mut earlier_changed = false;
         for (op, problem) in culprits {
             let kind = problem.kind;
             // A plunge stage 8 took for air: planned again once, every
@@ -108,9 +102,6 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
                     continue;
                 }
             }
-            if earlier_changed && rounds + 2 <= cfg.max_rounds {
-                continue;
-            }
             // Material that still stood (or a plunge no ramp fits): once,
             // the operation runs last, when everything else has cut.
             if matches!(
@@ -129,14 +120,12 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
                         round: rounds,
                         planned,
                     });
-                    earlier_changed |= kind == ProblemKind::PlungeIntoStock;
                     continue;
                 }
             }
             let Some(operation) = remove_operation(plan, op, &mut links) else {
                 continue;
             };
-            earlier_changed |= kind == ProblemKind::PlungeIntoStock;
             removed.push(RemovedOperation {
                 operation: op,
                 problem,
