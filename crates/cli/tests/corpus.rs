@@ -538,27 +538,32 @@ fn ribs_crossing_in_filleted_corners_are_finished_by_smaller_tools_in_turn() {
 
 /// A wing rib whose flange-side levels plunge 4 mm at a corner: the first
 /// replay undoes those operations, so the floor pass after them met their
-/// uncut stock with a rapid and was removed, and a 0.5 mm strip of floor
-/// stayed. The levels are planned again with ramps and the floor pass is
-/// judged again on the stock they now cut: nothing is removed, and the
-/// checker finds no missed material.
+/// uncut stock with a link stage 8 had lowered, and was removed for that
+/// rapid: a 0.5 mm strip of floor stayed. Its links now go over the top
+/// instead; the levels are planned again with ramps: nothing is removed,
+/// and the checker finds no missed material.
 #[test]
-fn a_later_operation_is_judged_again_after_the_ones_before_it_are_planned_again() {
+fn a_rapid_that_meets_stock_sends_the_links_over_the_top_not_the_operation_away() {
     let py = python();
     let corpus = corpus(&py);
-    let out = fresh("corpus-judged-again");
+    let out = fresh("corpus-links-over-top");
     let name = "wing_rib_09";
     let step = corpus.join(format!("{name}.step"));
     let p = plan(step.to_str().unwrap(), name, &out);
     assert!(p.program, "{name}: no program, exit {}", p.code);
     let v = &p.report["verification"];
-    let ramped = v["replanned"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|r| r["how"] == "ramped_entries")
-        .count();
-    assert!(ramped > 0, "{name}: nothing planned again: {v:#}");
+    let how = |h: &str| {
+        v["replanned"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|r| r["how"] == h)
+            .count()
+    };
+    assert!(
+        how("links_over_top") > 0,
+        "{name}: no links over the top: {v:#}"
+    );
     let removed = v["removed"].as_array().unwrap();
     assert!(removed.is_empty(), "{name}: {removed:#?}");
     let lib = default_tool_lib();

@@ -674,6 +674,75 @@ pub fn ramp_every_descent(
     Ok(ramped)
 }
 
+/// Stage 9's remedy for a rapid that met stock: every rapid link inside
+/// operation `id` that travels across below `top` (set-up frame height)
+/// goes up to `top`, across, and straight down to where it ended, as
+/// stage 7 planned links before stage 8 lowered them on its model of the
+/// in-process stock. Records `links_raised_on_replay` and retimes the
+/// operation; returns how many links it raised (0: the operation is as it
+/// was).
+pub fn raise_links(
+    plan: &mut Plan,
+    k: &Knowledge,
+    id: OperationId,
+    top: f64,
+) -> Result<usize, OperationsError> {
+    let (_, _, limits) = resources(plan, k)?;
+    let rapid_cap = limits.v_max.iter().copied().fold(0.0, f64::max);
+    let view = View::new(plan.setup.up);
+    let Some(oi) = plan.operations.iter().position(|o| o.id == id) else {
+        return Ok(0);
+    };
+    let op = &plan.operations[oi];
+    let rapid = |m: &PathMove| m.region == Region3::Rapid && m.arc.is_none();
+    let mut out: Vec<PathMove> = Vec::with_capacity(op.moves.len() + 2);
+    let mut pos = op.start;
+    let mut raised = 0;
+    let mut i = 0;
+    while i < op.moves.len() {
+        if !rapid(&op.moves[i]) {
+            out.push(op.moves[i].clone());
+            pos = op.moves[i].to;
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j < op.moves.len() && rapid(&op.moves[j]) {
+            j += 1;
+        }
+        let run = &op.moves[i..j];
+        let end = run[run.len() - 1].to;
+        let across = view.xy(pos).distance(view.xy(end)) > 1e-9;
+        let low = std::iter::once(pos)
+            .chain(run.iter().map(|m| m.to))
+            .any(|p| view.z(p) < top - 1e-9);
+        if across && low {
+            let template = run[0].clone();
+            let at = |p: DVec3| p + view.up * (top - view.z(p));
+            for to in [at(pos), at(end), end] {
+                out.push(PathMove {
+                    to,
+                    ..template.clone()
+                });
+            }
+            raised += 1;
+        } else {
+            out.extend(run.iter().cloned());
+        }
+        pos = end;
+        i = j;
+    }
+    if raised > 0 {
+        let op = &mut plan.operations[oi];
+        op.moves = out;
+        op.provenance
+            .values
+            .insert("links_raised_on_replay".into(), raised as f64);
+        retime(plan, oi, rapid_cap, &limits);
+    }
+    Ok(raised)
+}
+
 /// One operation's moves from `start` with each rapid up–across–down link
 /// lowered, the descent from `start` included; cuts the map as it goes.
 /// Returns the moves and how many links it lowered.

@@ -135,6 +135,9 @@ pub enum Replan {
     /// Its shank or holder met material that still stood: moved to the end
     /// of the program, when every other operation has cut.
     RunLast,
+    /// A rapid met stock: its links go over the top of the stock again,
+    /// as stage 7 planned them, not at stage 8's lowered heights.
+    LinksOverTop,
 }
 
 /// An operation the verification planned again, with the operation as

@@ -131,8 +131,7 @@ pub struct StockReport {
     pub removed_volume_mm3: f64,
     pub air_cutting: AirCutting,
     pub crashes: Vec<Crash>,
-    /// Operations undone for a crash or gouge, with it, and operations that
-    /// plunge, with their first plunge (only when
+    /// Operations undone for a crash or gouge, with it (only when
     /// [`MoveChecks::operations`] names the operations).
     pub excluded: Vec<(u32, Crash)>,
     pub gouges: DefectSummary,

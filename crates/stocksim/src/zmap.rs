@@ -244,9 +244,7 @@ pub struct MoveChecks {
     /// gouges) is undone and the rest of it skipped, so that the operations
     /// after it are judged on the stock the program without it leaves; the
     /// link into the next operation, which would then start elsewhere, is
-    /// not swept. [`ReplayStats::excluded`] lists them. A plunge is listed
-    /// (its first only) but not undone: a ramp in its place removes the
-    /// same material, so the operations after it are judged on that.
+    /// not swept. [`ReplayStats::excluded`] lists them.
     pub operations: Vec<(usize, u32)>,
 }
 
@@ -299,8 +297,7 @@ pub struct ReplayStats {
     pub crashes: Vec<Crash>,
     /// Tools that made feed moves, ascending.
     pub tools_used: Vec<u32>,
-    /// Operations undone for a crash, with it, and operations that plunge,
-    /// with their first plunge (see [`MoveChecks::operations`]).
+    /// Operations undone for a crash, with it (see [`MoveChecks::operations`]).
     pub excluded: Vec<(u32, Crash)>,
     pub warnings: Vec<String>,
 }
@@ -688,7 +685,6 @@ impl ZMap {
         let mut skip_op = false;
         let mut after_excluded = false;
         let mut fed_in_op = false;
-        let mut plunge_noted = false;
         for m in &program.moves {
             if exclusion {
                 let k = ops.partition_point(|(l, _)| *l <= m.line);
@@ -697,7 +693,6 @@ impl ZMap {
                     after_excluded = skip_op;
                     skip_op = false;
                     fed_in_op = false;
-                    plunge_noted = false;
                     cur = now;
                     self.begin_undo(now.is_some());
                 }
@@ -795,12 +790,6 @@ impl ZMap {
                 at: st.gouge_at.to_array(),
             });
             match (cur, crash.or(gouge)) {
-                (Some(k), Some(c)) if exclusion && c.kind == CrashKind::PlungeIntoStock => {
-                    if !plunge_noted {
-                        plunge_noted = true;
-                        out.excluded.push((ops[k].1, c));
-                    }
-                }
                 (Some(k), Some(c)) if exclusion => {
                     self.undo_operation();
                     out.excluded.push((ops[k].1, c));

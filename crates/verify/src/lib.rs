@@ -102,6 +102,30 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
                     continue;
                 }
             }
+            // A rapid that met stock: once, the operation's links go over
+            // the top, the link into it too.
+            if kind == ProblemKind::RapidThroughStock && !tried(Replan::LinksOverTop) {
+                let before = plan.operations.iter().find(|o| o.id == op).cloned();
+                let top = brep.bbox().max.z + k.methods.safe_clearance;
+                let raised = thinplan_operations::links::raise_links(plan, k, op, top)
+                    .map_err(|e| VerifyError(format!("re-planning {op}'s links: {e}")))?;
+                let into = plan
+                    .operations
+                    .iter()
+                    .find(|o| o.id == op)
+                    .is_some_and(|o| o.link_z.is_some());
+                clear_link(plan, op, &mut links);
+                if let (true, Some(planned)) = (raised > 0 || into, before) {
+                    replanned.push(ReplannedOperation {
+                        operation: op,
+                        problem,
+                        how: Replan::LinksOverTop,
+                        round: rounds,
+                        planned,
+                    });
+                    continue;
+                }
+            }
             // Material that still stood (or a plunge no ramp fits): once,
             // the operation runs last, when everything else has cut.
             if matches!(

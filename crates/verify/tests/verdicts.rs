@@ -174,3 +174,56 @@ fn plunges_the_replay_finds_are_planned_again_as_ramps() {
     s.run_stage(Stage::Verify).expect("verifies again");
     assert_eq!(first, serde_json::to_vec(&s.plan).unwrap());
 }
+
+/// Stage 9's remedy for a rapid that met stock: every rapid link of the
+/// operation that travels across below the top goes up to it, across and
+/// straight down to where it ended; its cutting moves are untouched.
+#[test]
+fn links_raised_over_the_top_keep_every_cut_and_every_link_end() {
+    let mut s = to_order("tall_rib", load_knowledge(None).unwrap());
+    let top = s.brep.bbox().max.z + s.knowledge.methods.safe_clearance;
+    let is_rapid = |m: &thinplan_plan::PathMove| m.region == thinplan_plan::Region3::Rapid;
+    let low_across = |o: &thinplan_plan::Operation| {
+        let mut pos = o.start;
+        o.moves.iter().any(|m| {
+            let across = is_rapid(m) && (m.to.truncate() - pos.truncate()).length() > 1e-9;
+            let low = m.to.z < top - 1e-9;
+            pos = m.to;
+            across && low
+        })
+    };
+    let op = s
+        .plan
+        .operations
+        .iter()
+        .find(|o| low_across(o))
+        .cloned()
+        .expect("an operation with a lowered link");
+    let n = thinplan_operations::links::raise_links(&mut s.plan, &s.knowledge, op.id, top)
+        .expect("raises");
+    assert!(n > 0);
+    let now = s.plan.operations.iter().find(|o| o.id == op.id).unwrap();
+    assert!(!low_across(now), "a rapid still crosses below {top}");
+    let cuts = |o: &thinplan_plan::Operation| {
+        o.moves
+            .iter()
+            .filter(|m| !is_rapid(m))
+            .cloned()
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(cuts(&op), cuts(now));
+    // Each cut starts where it started before.
+    let starts = |o: &thinplan_plan::Operation| {
+        let mut pos = o.start;
+        let mut out = Vec::new();
+        for m in &o.moves {
+            if !is_rapid(m) {
+                out.push(pos);
+            }
+            pos = m.to;
+        }
+        out
+    };
+    assert_eq!(starts(&op), starts(now));
+    assert_eq!(now.provenance.values["links_raised_on_replay"], n as f64);
+}
