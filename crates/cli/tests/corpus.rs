@@ -579,3 +579,41 @@ fn a_rapid_that_meets_stock_sends_the_links_over_the_top_not_the_operation_away(
         "{name}: the checker finds {missed:.2} mm3 missed"
     );
 }
+
+/// A frame whose outer wall stands on a floor fillet: a slab at the
+/// fillet's top samples the wall's vertical face at every height, and an
+/// edge point on that face read as outside the product by rounding once
+/// cast its ray past the face to the wall's far side, 2.8 mm further.
+/// Passes then came 0.46 mm into the wall; stage 9 removed them, the
+/// operations after them met the stock they left, and no program was
+/// written. The face through the point is now asked for first: a program,
+/// and the checker finds nothing against it.
+#[test]
+fn an_edge_on_a_vertical_face_reads_that_face_at_every_height() {
+    let py = python();
+    let corpus = corpus(&py);
+    let out = fresh("corpus-face-at-every-height");
+    let name = "pocket_frame_05";
+    let step = corpus.join(format!("{name}.step"));
+    let p = plan(step.to_str().unwrap(), name, &out);
+    assert!(p.program, "{name}: no program, exit {}", p.code);
+    let gouges = p.report["verification"]["removed"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["problem"]["kind"] == "gouge")
+        .count();
+    assert_eq!(gouges, 0, "{name}: operations removed for gouges");
+    let lib = default_tool_lib();
+    let checked = check(&py, &out, &corpus, &lib);
+    let failures = judge(std::slice::from_ref(&p), &checked);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let missed = checked[name]
+        .pointer("/missed/volume")
+        .and_then(Value::as_f64)
+        .unwrap();
+    assert!(
+        missed <= 1.0,
+        "{name}: the checker finds {missed:.2} mm3 missed"
+    );
+}

@@ -257,6 +257,15 @@ impl Section {
 /// the line meets none: the product covers the whole reach (`-reach`), or
 /// the nearest product in any direction (`reach` where there is none).
 pub(crate) fn face_beyond(s: &Section, p: [f64; 2], n: [f64; 2], reach: f64) -> f64 {
+    // A point on the boundary (an edge on a vertical face, sampled at
+    // another height) is inside or not by rounding, and a ray from it may
+    // miss the face it starts on and meet the product's far side: the face
+    // through it is asked for first, both ways.
+    let ahead = s.ray(p, n, ON_FACE);
+    let behind = s.ray(p, [-n[0], -n[1]], ON_FACE);
+    if ahead <= ON_FACE || behind <= ON_FACE {
+        return if ahead <= behind { ahead } else { -behind };
+    }
     let inside = s.contains(p);
     let dir = if inside { [-n[0], -n[1]] } else { n };
     let best = s.ray(p, dir, reach);
@@ -271,6 +280,10 @@ pub(crate) fn face_beyond(s: &Section, p: [f64; 2], n: [f64; 2], reach: f64) -> 
             .fold(reach, f64::min),
     }
 }
+
+/// How near a face a point is taken to lie on it (mm): far below any
+/// machining tolerance, far above the rounding of sections and booleans.
+const ON_FACE: f64 = 1e-6;
 
 fn seg_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
@@ -361,6 +374,30 @@ mod tests {
             } else {
                 prop_assert!(fast > reach);
             }
+        }
+
+        /// A point on a wall's face, as rounding puts it (a hair inside or
+        /// outside), reads the face through it, never the wall's far side.
+        #[test]
+        fn a_point_on_a_face_reads_that_face_not_the_far_side(
+            ang in 0.0f64..std::f64::consts::TAU,
+            thick in 0.5f64..5.0,
+            t in 0.01f64..0.99,
+            ox in -100.0f64..100.0,
+            oy in -100.0f64..100.0,
+        ) {
+            let (c, s_) = (ang.cos(), ang.sin());
+            let at = |x: f64, y: f64| [ox + c * x - s_ * y, oy + s_ * x + c * y];
+            // The wall [0, 80] × [0, thick], counter-clockwise: its face
+            // towards +y runs from (80, thick) to (0, thick).
+            let wall = vec![at(0.0, 0.0), at(80.0, 0.0), at(80.0, thick), at(0.0, thick)];
+            let sec = Section::new(vec![wall.clone()], vec![vec![wall.clone()]]);
+            let (a, b) = (wall[2], wall[3]);
+            let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            // Towards the product: -y in the wall's frame.
+            let n = [s_, -c];
+            let v = face_beyond(&sec, p, n, 50.0);
+            prop_assert!(v.abs() <= ON_FACE, "{v} (wall {thick} thick)");
         }
 
         #[test]
