@@ -33,8 +33,18 @@ pub struct VerificationKnowledge {
     pub max_plunge_mm3: f64,
     /// Replays at most (each after removing failing operations).
     pub max_rounds: u32,
+    /// Replays more, after `max_rounds`, that only remove operations whose
+    /// problems remain (each confirmed by the next): a program that leaves
+    /// material rather than none. Problems left after them make the plan
+    /// unsafe.
+    #[serde(default = "default_removal_rounds")]
+    pub max_removal_rounds: u32,
     /// Post-processor id whose program is replayed.
     pub post: String,
+}
+
+fn default_removal_rounds() -> u32 {
+    4
 }
 
 impl VerificationKnowledge {
@@ -60,6 +70,12 @@ impl VerificationKnowledge {
         range("max_descent_deg", self.max_descent_deg, 1.0, 90.0);
         range("max_plunge_mm3", self.max_plunge_mm3, 0.0, 1e6);
         range("max_rounds", self.max_rounds as f64, 1.0, 20.0);
+        range(
+            "max_removal_rounds",
+            self.max_removal_rounds as f64,
+            0.0,
+            20.0,
+        );
         if self.grid_shifts.is_empty() || self.grid_shifts.len() > 4 {
             out.push((
                 "grid_shifts",

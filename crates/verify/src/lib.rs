@@ -64,7 +64,7 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
     let replay = loop {
         rounds += 1;
         let r = replay(plan, brep, k, cfg)?;
-        if r.problems.is_empty() || rounds >= cfg.max_rounds {
+        if r.problems.is_empty() || rounds >= cfg.max_rounds + cfg.max_removal_rounds {
             break r;
         }
         let culprits = culprits(&r.problems);
@@ -194,7 +194,8 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
             .with_value("max_unreachable_mm3", cfg.max_unreachable_mm3)
             .with_value("max_descent_deg", cfg.max_descent_deg)
             .with_value("max_plunge_mm3", cfg.max_plunge_mm3)
-            .with_value("max_rounds", cfg.max_rounds as f64),
+            .with_value("max_rounds", cfg.max_rounds as f64)
+            .with_value("max_removal_rounds", cfg.max_removal_rounds as f64),
     });
     plan.stages_done.push(Stage::Verify);
     Ok(())

@@ -227,3 +227,40 @@ fn links_raised_over_the_top_keep_every_cut_and_every_link_end() {
     assert_eq!(starts(&op), starts(now));
     assert_eq!(now.provenance.values["links_raised_on_replay"], n as f64);
 }
+
+/// The rounds that only remove: with one replay and none after it, the
+/// operations of the set's largest tools, replayed 2 mm wider than
+/// planned, are found gouging, but nothing confirms a program without
+/// them: unsafe, no program. With removal rounds after it, each removal is
+/// confirmed by the next replay: incomplete, no problem left, the smaller
+/// tools' operations kept.
+#[test]
+fn removal_rounds_confirm_a_program_without_the_failing_operations() {
+    let run = |removal_rounds: u32| {
+        let mut s = to_order("wing_rib", load_knowledge(None).unwrap());
+        s.knowledge = with_tools(s.knowledge.clone(), |t| {
+            if t.diameter > 15.0 {
+                t.diameter += 2.0;
+                t.shank_diameter += 2.0;
+            }
+        });
+        s.knowledge.verification.max_rounds = 1;
+        s.knowledge.verification.max_removal_rounds = removal_rounds;
+        s.run_stage(Stage::Verify).expect("verifies");
+        s.plan.verification.clone().unwrap()
+    };
+    let none = run(0);
+    assert_eq!(none.verdict, Verdict::Unsafe);
+    assert_eq!(none.rounds, 1);
+    let some = run(4);
+    assert_eq!(some.verdict, Verdict::Incomplete, "{:?}", some.problems);
+    assert!(some.problems.is_empty());
+    assert!(
+        some.rounds > 1 && some.rounds <= 5,
+        "{} {:?}",
+        some.rounds,
+        some.removed.len()
+    );
+    assert!(!some.removed.is_empty());
+    assert!(some.removed.len() < some.planned_order.len());
+}
