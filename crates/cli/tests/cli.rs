@@ -469,7 +469,7 @@ fn plan_json_machining_features_follow_the_contract() {
 /// Material (mm³) the stock simulation may find above reach per sample
 /// (`leftover_above_reach`: where no tool reaches the part, what a tool
 /// could still have taken off the top), and why. Missed material (where a
-/// tool reaches the part) must be none on every sample: issue 5's bar, the
+/// tool reaches the part) must be none on every sample: the
 /// final stock equals the part within 0.05 mm except where no tool can
 /// reach. Until the thirteenth session both were one figure, "missed",
 /// which the values in the reasons below are. Before the stage-7 fixes of
@@ -759,7 +759,7 @@ fn programs_read_cleanly_in_linuxcnc_rs274() {
     }
 }
 
-/// Issue 4's command line: `plan --until features --svg DIR` stops after
+/// The command line: `plan --until features --svg DIR` stops after
 /// the machining features and draws each wall (figure 4.1); `explain`
 /// gives what the plan file records, checked against the file itself.
 #[test]
@@ -1056,7 +1056,7 @@ fn links_on_the_in_process_stock_run_lower_and_never_into_stock() {
     assert!(planned > 0 && lowered > 0.0);
 }
 
-/// Sloped product faces (issue 5): the boundary pass that follows the
+/// Sloped product faces: the boundary pass that follows the
 /// chamfer (`sloped_faces: Follow`, the default) against one that takes it
 /// as vertical at each slab's middle (`AsVertical`), both replayed by the
 /// independent stock simulation: following takes the bands the corner

@@ -416,7 +416,7 @@ fn knowledge_with_d20_only(d: &Path) -> PathBuf {
     )
 }
 
-/// A case made to fail (issue 22): a frame whose pockets have R5.75–R7.5
+/// A case made to fail: a frame whose pockets have R5.75–R7.5
 /// corners, planned with a Ø20 alone. The corners are left, refused naming
 /// the diameter that would reach them; the verdict is incomplete (exit 8),
 /// the program is written, and the independent checker finds it free of
@@ -479,10 +479,10 @@ fn a_d20_alone_leaves_the_pocket_corners_and_names_the_tool_they_need() {
 }
 
 /// A pocket frame whose floor slab is a section through filleted corners:
-/// its offsets used to fall apart (pieces of no area), so its bottom layer
-/// found no room to ramp in, and stage 7 refused the slab and, with it, the
-/// four below it (3,100 mm³ left by the checker's count). Now stage 7
-/// refuses no feature, and the program is safe by the checker.
+/// its offsets can fall apart into pieces of no area, leaving the bottom
+/// layer no room to ramp in, so that stage 7 would refuse the slab and, with
+/// it, the four below it. Stage 7 must refuse no feature, and the program
+/// must be safe by the checker.
 #[test]
 fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
     let py = python();

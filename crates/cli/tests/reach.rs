@@ -1,4 +1,4 @@
-//! Tool reach (issue 22, item 3), end to end: a level is cut only by a tool
+//! Tool reach, end to end: a level is cut only by a tool
 //! whose holder clears the top of the stock; what no tool of the set reaches
 //! is refused with the tool that would do, and the verdict says incomplete.
 

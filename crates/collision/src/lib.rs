@@ -1,4 +1,4 @@
-//! Shank and holder against the in-process stock (issue 5, item 5).
+//! Shank and holder against the in-process stock.
 //!
 //! For every operation in the plan's order, the stock at that point is the
 //! part plus every machining feature not yet removed. Everything here is a

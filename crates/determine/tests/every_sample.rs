@@ -1,4 +1,4 @@
-//! Issue 4's independent checks on every sample part: the thesis's
+//! Independent checks on every sample part: the thesis's
 //! sequencing rules as the connections and roles call for them (§4.2.2),
 //! each wall's step approach top-down and alternating (figure 4.1) and sized
 //! within the allowed deflection (§4.1.2), flanges before their web except
@@ -241,7 +241,7 @@ fn every_samples_step_sizes_keep_the_deflection_within_the_allowed_value() {
 /// every feature of the flange and every one of the wall are ordered, and a
 /// wall feature goes first only where it stands higher than the tool set's
 /// shortest flute above the flange feature's bottom (the shank would rub it
-/// otherwise, issue 5), by the recorded yield rule.
+/// otherwise), by the recorded yield rule.
 #[test]
 fn every_samples_flange_features_precede_their_walls_except_where_a_shank_would_rub() {
     let k = Knowledge::builtin().unwrap();

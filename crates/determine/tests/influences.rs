@@ -308,7 +308,7 @@ fn a_flanges_features_are_no_wider_than_the_webs_permissible_height() {
 /// machining features, on flange_web_slot (a 35 mm flange on its web): the
 /// web's face-milling layers that stand higher than the tool set's shortest
 /// flute above a flange feature's bottom go before it (a shank cutting the
-/// flange's narrow steps would rub them: issue 5's shank collisions), every
+/// flange's narrow steps would rub them: shank collisions), every
 /// other web layer after it, so the two interleave top-down. Without the
 /// knowledge's `shank_access` the whole flange goes first.
 #[test]

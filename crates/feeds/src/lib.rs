@@ -36,8 +36,8 @@
 //!    separable pair `u_i, u_{i+1} ≤ A_k/|α + β|` (its constant-speed point, conservative).
 //!    The feasible set is then a lattice: the greedy passes below give its greatest element,
 //!    time-optimal for the discretisation and monotone in the limits (a slower machine is
-//!    never faster; before 2026-11-23 it was, on about one random path in 5 000–7 500). (Until 2026-11-23 the curvature of *either* end was applied at *both*
-//!    end speeds: conservative by O(spacing), 2–3 % on the pocket spirals against TOPP-RA.)
+//!    never faster). Each end speed sees its own end's curvature only (applying either
+//!    end's at both is conservative by O(spacing), 2–3 % on the pocket spirals).
 //! 4. **Backward pass** (controllable sets, as TOPP-RA): from `u_{n−1} = 0`, the largest `u_i`
 //!    for which some `u_{i+1}` in `[0, hi_{i+1}]` satisfies segment i's constraints — a
 //!    two-variable LP, solved in closed form by eliminating `u_{i+1}` (Fourier–Motzkin over
@@ -59,9 +59,8 @@
 //!    safeguarded Newton; where that model cannot connect the end speeds, `max(ramp, F)`.
 //!    An end speed above `vc_i²` is lowered to it for this profile (the machine can follow
 //!    `max(ramp, profile)`, faster than either, so the time is an upper bound that falls with
-//!    the limits; until 2026-11-23 such a segment was timed by the bare ramp).
-//!    (Until 2026-11-23 a constant acceleration up to the cap was used: a heuristic whose
-//!    rate fell as the cap rose, so a faster machine could be slower.)
+//!    the limits). A constant acceleration up to the cap would be a heuristic whose rate
+//!    falls as the cap rises, so a faster machine could come out slower.
 //!    Long straight segments are thus timed exactly, however coarse the point spacing.
 //!
 //! **Tangential acceleration (the choice the design leaves open).** The available tangential
@@ -706,7 +705,7 @@ fn ramp_hybrid_time(u0: f64, u1: f64, lines: &[(f64, f64)], ds: f64) -> f64 {
         }
         // Stop on the residual or the bracket, never on a short step: near the level where
         // a⁺ runs out, g' is huge and Newton crawls (it stopped at hi there, timing F
-        // itself: a faster machine came out slower, issue 6).
+        // itself, and a faster machine came out slower).
         if gu.abs() <= 1e-13 * ds || b - a <= 1e-14 * b {
             break;
         }

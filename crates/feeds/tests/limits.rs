@@ -189,21 +189,12 @@ proptest! {
         prop_assert!(s.total_time.is_finite());
     }
 
-    // Monotone in the limits (issue 6; ignored until 2026-11-23, when it failed about once in
-    // 5 000–7 500 random paths, by 0.003–15 %). Causes found and fixed:
-    // 1. the in-segment profile used one constant acceleration up to the cruise cap, lower
-    //    the higher the cap (regression seeds 2a86…, 4918…): now the exact in-segment optimum;
-    // 2. TOPP-RA's greedy forward pass is optimal only where the feasible set is a lattice;
-    //    a segment constraint with both coefficients of the same sign (curvature term > the
-    //    discretised tangential term) broke that. Such a constraint is now replaced by the
-    //    separable pair at its constant-speed point (conservative), so the greedy speeds are
-    //    the greatest feasible ones and fall with the limits;
-    // 3. an end speed above the in-segment cap was timed by the bare ramp: now the profile
-    //    from the end speeds lowered to the cap, min'd with the ramp;
-    // 4. rounding at the level where the in-segment acceleration runs out (an end speed at
-    //    the cap exactly) sent one machine to the ramp (regression seeds 0687…, 5139…): the
-    //    hybrid profile's root search now stops on the residual, not on a short step.
-    // Run once with PROPTEST_CASES=50000 (release) four times on 2026-11-23: 200 000 clean.
+    // Monotone in the limits. What it depends on: the in-segment profile is the exact
+    // optimum (not one constant acceleration up to the cruise cap); a segment constraint
+    // with both coefficients of the same sign is replaced by the separable pair at its
+    // constant-speed point (TOPP-RA's greedy pass is optimal only on a lattice); an end
+    // speed above the in-segment cap is timed from the end speeds lowered to the cap;
+    // the hybrid profile's root search stops on the residual, not on a short step.
     #[test]
     fn slower_machine_never_faster((p, caps) in random_path(), m in random_limits(), f in 0.3f64..1.0) {
         // Monotonicity: tighter limits never give a shorter time.

@@ -1,5 +1,5 @@
 //! Per-frame CPU cost of the application with 1 M tool-path segments and
-//! 10 000 machining-feature volumes loaded (issue 7's budget: under 10 ms).
+//! 10 000 machining-feature volumes loaded (the budget: under 10 ms).
 //!
 //! `cargo bench -p thinplan-gui --bench frame` (headless, software GL). It
 //! prints the first frame (scene built and uploaded once), then the mean and

@@ -1,4 +1,4 @@
-//! Machining-feature edits as plain functions on a plan (issue 7, item 4):
+//! Machining-feature edits as plain functions on a plan:
 //! split at a height, split by a line in plan, merge two adjacent features
 //! of one owner, and a new feature from a drawn profile. [`AppState`]
 //! wraps each in one undoable history entry; here nothing is drawn and

@@ -1,4 +1,4 @@
-//! thinplan's desktop application (issue 7): a tree, a 3D viewport, a
+//! thinplan's desktop application: a tree, a 3D viewport, a
 //! network view of sequence constraints and an inspector over one plan,
 //! with undoable edits, stage runs in a background thread and a sequence
 //! simulation. The application owns no planning logic: stages run through

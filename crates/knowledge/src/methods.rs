@@ -55,14 +55,14 @@ pub struct MethodKnowledge {
     pub breakthrough: f64,
     /// A tool may cut down to `stickout − holder_clearance` (mm) below the
     /// top of the stock, never deeper: its holder's face stays this far
-    /// above the highest stock it could meet (tool reach, issue 22).
+    /// above the highest stock it could meet (tool reach).
     pub holder_clearance: f64,
     /// The methods, tried in order: the first whose `applies` matches a
     /// feature is used.
     pub methods: Vec<Method>,
 }
 
-/// The height of links that leave cleared space (issue 5, item 4).
+/// The height of links that leave cleared space.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum LinkHeight {
     /// Over the top of the whole stock plus `safe_clearance`.
@@ -74,7 +74,7 @@ pub enum LinkHeight {
 }
 
 /// How passes meet a product face that slopes within a slab (a chamfer, a
-/// cut-out's round bottom; issue 5).
+/// cut-out's round bottom).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum SlopedFaces {
     /// The tool's profile (its corner radius) touches the face: the product

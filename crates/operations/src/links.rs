@@ -1,5 +1,5 @@
 //! Stage 8, second step: links at the lowest safe height the in-process
-//! stock allows (issue 5, item 4; thesis §5.4.3).
+//! stock allows (thesis §5.4.3).
 //!
 //! Stage 7 takes every link that leaves a feature's cleared space over the
 //! top of the whole stock: it cannot know what the operations before leave

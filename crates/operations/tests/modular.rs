@@ -421,7 +421,7 @@ fn a_plan_without_resolve_is_an_error() {
 /// A strip narrower than the tool with every edge open: the centre region
 /// reaches a radius past each long side, but one line down the middle clears
 /// the strip (every point within r of it); lines farther out would only
-/// graze what it cut. Issue 5: with all edges open the flange's cut-out
+/// graze what it cut. With all edges open the flange's cut-out
 /// slabs got three times the lines they needed.
 #[test]
 fn a_narrow_open_strip_is_cleared_by_one_line_down_its_middle() {
@@ -456,7 +456,7 @@ fn a_narrow_open_strip_is_cleared_by_one_line_down_its_middle() {
     check_product_and_floor(&f, &ops, &k);
 }
 
-/// A drafted wall (issue 5, sloped faces): the step's product wall (y = 30)
+/// A drafted wall (sloped faces): the step's product wall (y = 30)
 /// leans into the step at its bottom — the face lies `(z − 10)·0.05` beyond
 /// the region's edge. Followed, every cutting tool centre at the bottom
 /// level keeps the distance the tool's profile needs from that face (the

@@ -1,4 +1,4 @@
-//! Tool paths + post for the largest sample part (issue 5):
+//! Tool paths + post for the largest sample part:
 //! `cargo bench -p thinplan-pipeline --bench toolpaths`. Prints the time of
 //! stages 7 and 8 and of the post, per operation and in all.
 

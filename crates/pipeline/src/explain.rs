@@ -1,4 +1,4 @@
-//! Why the plan is as it is (issue 4, `thinplan explain PLAN ID [ID]`): the
+//! Why the plan is as it is (`thinplan explain PLAN ID [ID]`): the
 //! provenance of a stiffness feature, machining feature or operation with
 //! every constraint and refusal that names it; for two ids, the constraint
 //! between them or the chain of constraints that orders them. A function

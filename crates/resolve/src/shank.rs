@@ -1,4 +1,4 @@
-//! Shank access (issue 5): a tool cutting a feature F reaches beyond F's
+//! Shank access: a tool cutting a feature F reaches beyond F's
 //! open edges (its overhang, ½D, plus the shank's radius, ½D), and above
 //! its flutes (`flute_length`) the shank does not cut. A neighbour N that
 //! still stands there more than a flute length above F's bottom would rub

@@ -1,4 +1,4 @@
-//! Shank access (issue 5): a feature standing beside another, within the
+//! Shank access: a feature standing beside another, within the
 //! tool's reach across its non-product edges and higher than a flute length
 //! above its bottom, is machined first.
 

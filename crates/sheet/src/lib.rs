@@ -1,4 +1,4 @@
-//! The shop-floor setup sheet (issue 5, item 8): one self-contained HTML
+//! The shop-floor setup sheet: one self-contained HTML
 //! page per plan — inline CSS and SVG, no scripts, no external resources —
 //! with the part, the set-up, the blank, the tools with their tool-table
 //! numbers, the sequence of machining features per wall, the operations in

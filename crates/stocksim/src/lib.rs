@@ -1,5 +1,5 @@
-//! An independent stock simulation for thinplan's NC programs (issue #5
-//! item 7): it reads the G-code text with its own reader ([`gcode`]), replays
+//! An independent stock simulation for thinplan's NC programs: it
+//! reads the G-code text with its own reader ([`gcode`]), replays
 //! it on a Z-map of a box blank with the real tool shapes ([`zmap`],
 //! [`tools`]), and compares the result with the part's B-rep ([`compare`]):
 //! gouges, leftover material (missed or unreachable), rapids into stock,
