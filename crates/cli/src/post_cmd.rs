@@ -131,6 +131,7 @@ mod tests {
                 feed: 500.0,
                 region: Region3::Rest,
             }],
+            schedule: Default::default(),
             provenance: Provenance::new(ProvenanceSource::Default, "test"),
             link_z: None,
         });

@@ -108,6 +108,7 @@ fn a_short_stickout_brings_the_holder_onto_the_rib_of_a_handmade_path() {
             mv([140.0, 31.5, 40.0], Region3::Rest),
             mv([80.0, 31.5, 150.0], Region3::Rapid),
         ],
+        schedule: Default::default(),
         provenance: Provenance::new(ProvenanceSource::User, "test"),
         link_z: None,
     });
@@ -303,6 +304,7 @@ fn a_short_holder_hits_a_tall_unremoved_feature_and_not_once_it_is_removed() {
         spindle_rpm: 10_000.0,
         start: world(mid.x, mid.y, body.z_hi + 100.0),
         moves,
+        schedule: Default::default(),
         provenance: Provenance::new(ProvenanceSource::User, "test"),
         link_z: None,
     };

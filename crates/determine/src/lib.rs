@@ -34,9 +34,9 @@ use thinplan_knowledge::{
     WallSteps,
 };
 use thinplan_plan::{
-    Adjacency, Constraint, ConstraintKind, MachiningFeature, MachiningFeatureId, Plan, Prism,
-    PrismFrame, ProfileLoop, ProfileVertex, Provenance, ProvenanceSource, Refusal, Region, Stage,
-    StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
+    Adjacency, Constraint, ConstraintKind, FeatureOrigin, MachiningFeature, MachiningFeatureId,
+    Plan, Prism, PrismFrame, ProfileLoop, ProfileVertex, Provenance, ProvenanceSource, Refusal,
+    Region, Stage, StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
 };
 use thinplan_sizing::{MillingMode, SizingError, StepSizes, Wall};
 
@@ -674,6 +674,11 @@ fn wall_steps(
                 side_adjacency,
                 hole_adjacency: Vec::new(),
                 bottom_adjacency: Adjacency::Product,
+                origin: FeatureOrigin {
+                    rule: rule.clone(),
+                    large: Some(st.large),
+                },
+                access_blocked: false,
                 slopes: None,
                 provenance: prov,
             });
@@ -746,6 +751,15 @@ fn insert_due(
             side_adjacency,
             hole_adjacency: Vec::new(),
             bottom_adjacency: Adjacency::Open,
+            origin: FeatureOrigin {
+                rule: ins.rule.clone(),
+                large: ins
+                    .values
+                    .iter()
+                    .find(|(k, _)| *k == "large")
+                    .map(|(_, v)| *v > 0.5),
+            },
+            access_blocked: false,
             slopes: None,
             provenance: prov,
         });

@@ -12,8 +12,8 @@
 use glam::DVec3;
 use thinplan_knowledge::WebFaceMill;
 use thinplan_plan::{
-    Adjacency, MachiningFeature, MachiningFeatureId, Prism, PrismFrame, ProfileLoop, ProfileVertex,
-    Provenance, ProvenanceSource, Region, StiffnessFeature,
+    Adjacency, FeatureOrigin, MachiningFeature, MachiningFeatureId, Prism, PrismFrame, ProfileLoop,
+    ProfileVertex, Provenance, ProvenanceSource, Region, StiffnessFeature,
 };
 
 use crate::{area2, prism_points, span, Ctx, Determination, WallGeom, EPS, RULE_PREFIX};
@@ -137,6 +137,11 @@ pub(crate) fn face_mill(
             } else {
                 Adjacency::Feature
             },
+            origin: FeatureOrigin {
+                rule: rule.clone(),
+                large: None,
+            },
+            access_blocked: false,
             slopes: None,
             provenance: prov,
         });

@@ -94,6 +94,7 @@ fn big_plan(base: &Plan) -> Plan {
             spindle_rpm: 20000.0,
             start: DVec3::new(0.0, 0.0, z + 5.0),
             moves,
+            schedule: Default::default(),
             provenance: Provenance::new(ProvenanceSource::User, "bench"),
             link_z: None,
         });

@@ -790,6 +790,8 @@ pub fn add_drawn(
         hole_adjacency: Vec::new(),
         bottom_adjacency: Adjacency::Product,
         slopes: None,
+        origin: Default::default(),
+        access_blocked: false,
         provenance: prov,
     });
     Ok(id)
@@ -896,6 +898,8 @@ mod tests {
             hole_adjacency,
             bottom_adjacency: Adjacency::Product,
             slopes: None,
+            origin: Default::default(),
+            access_blocked: false,
             provenance: Provenance::new(ProvenanceSource::Recogniser, "test"),
         }
     }

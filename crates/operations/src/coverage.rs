@@ -190,6 +190,7 @@ mod tests {
             start,
             moves,
             link_z: None,
+            schedule: Default::default(),
             provenance: Provenance::new(thinplan_plan::ProvenanceSource::Knowledge, "t"),
         }
     }

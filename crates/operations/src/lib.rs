@@ -33,19 +33,16 @@ use thinplan_feeds::MachineLimits;
 use thinplan_knowledge::Knowledge;
 use thinplan_plan::{
     ArcMove, MachiningFeatureId, Operation, OperationId, PathMove, Plan, Provenance,
-    ProvenanceSource, Refusal, Region3, Stage,
+    ProvenanceSource, Refusal, Region3, Schedule, Stage,
 };
 
 pub use order::{order, OrderError};
 
-/// Provenance value (1) of an operation stage 8 runs at the end, with the
-/// floor rest passes (`methods.<id>.wall_rest` with `run_last`).
-pub const RUN_LAST: &str = "run_last";
-
-/// Whether stage 8 runs `op` at the end, by tool, after every other
-/// operation: floor rest passes, and wall rest passes the knowledge defers.
+/// Whether stage 8 runs `op` after its feature's other operations, with the
+/// rest passes (floor rest passes, wall rest passes the knowledge defers,
+/// passes planned with every other feature gone).
 pub fn runs_last(op: &Operation) -> bool {
-    op.provenance.rule.ends_with(".rest_pass") || op.provenance.values.get(RUN_LAST) == Some(&1.0)
+    !op.schedule.is_with_feature()
 }
 pub use path::{Kind, LMove};
 
@@ -210,7 +207,7 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
         .machining_features
         .iter()
         .enumerate()
-        .filter(|(_, f)| f.provenance.values.get("access_blocked") == Some(&1.0))
+        .filter(|(_, f)| f.access_blocked)
         .map(|(i, _)| {
             (
                 i,
@@ -347,8 +344,7 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
             };
             // Material covered from the tool side is an undercut: a height
             // field along the spindle (the stock simulation) never sees it.
-            let seen = !f.provenance.values.contains_key("access_blocked")
-                && !reason.contains("another set-up");
+            let seen = !f.access_blocked && !reason.contains("another set-up");
             let provenance = if *unreachable {
                 unreachable_provenance(feature_volume(f), seen)
             } else {
@@ -627,8 +623,8 @@ fn has_orphan_stretch(
 }
 
 /// Wall rest passes with the feature's own tool after every feature
-/// (`after_every_feature`) are planned per feature, without knowing what
-/// the other features' operations cut. One whose every boundary point
+/// (scheduled at the end with `covered_within_mm`) are planned per feature,
+/// without knowing what the other features' operations cut. One whose every boundary point
 /// another operation already cut (a move at or below its level whose disc
 /// holds its disc within `min_left`) would only re-machine the product:
 /// it is dropped, with a refusal naming its feature and rule. Ids are
@@ -638,7 +634,13 @@ fn drop_covered_rest(
     up: DVec3,
     tools: &thinplan_knowledge::ToolSet,
 ) -> Vec<Refusal> {
-    let own = |o: &Operation| o.provenance.values.get("after_every_feature") == Some(&1.0);
+    let within = |o: &Operation| match o.schedule {
+        Schedule::AtEnd {
+            covered_within_mm: Some(ml),
+        } => Some(ml),
+        _ => None,
+    };
+    let own = |o: &Operation| within(o).is_some();
     if !ops.iter().any(own) {
         return Vec::new();
     }
@@ -655,12 +657,7 @@ fn drop_covered_rest(
     let mut drop = Vec::new();
     for (idx, o) in ops.iter().enumerate().filter(|(_, o)| own(o)) {
         let r = radius(o);
-        let ml = o
-            .provenance
-            .values
-            .get("min_left_mm")
-            .copied()
-            .unwrap_or(0.0);
+        let ml = within(o).unwrap_or(0.0);
         let mut from = o.start;
         let mut covered = true;
         'moves: for m in &o.moves {
@@ -857,6 +854,7 @@ fn to_operation(
         spindle_rpm: lo.rpm,
         start: to_part(lo.start),
         moves,
+        schedule: lo.schedule,
         provenance: prov,
         link_z: None,
     }
@@ -930,6 +928,13 @@ mod tests {
                 ),
                 mv(b.0, b.1, 20.0, Region3::Rapid),
             ],
+            schedule: if own {
+                Schedule::AtEnd {
+                    covered_within_mm: Some(0.1),
+                }
+            } else {
+                Schedule::WithFeature
+            },
             provenance,
             link_z: None,
         }

@@ -265,8 +265,7 @@ fn rest_before_below(
     i: usize,
 ) -> usize {
     let o = &plan.operations[i];
-    let v = &o.provenance.values;
-    if v.contains_key(crate::layers::ORPHAN) || v.get("after_every_feature") == Some(&1.0) {
+    if matches!(o.schedule, thinplan_plan::Schedule::AtEnd { .. }) {
         return out.len();
     }
     let feats = &plan.machining_features;

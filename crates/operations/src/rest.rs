@@ -259,6 +259,8 @@ mod tests {
             hole_adjacency: vec![],
             bottom_adjacency: Adjacency::Product,
             slopes: None,
+            origin: Default::default(),
+            access_blocked: false,
             provenance: Provenance::new(ProvenanceSource::Default, "test"),
         };
         let free = vec![vec![rect(0.0, 0.0, 60.0, 60.0)]];

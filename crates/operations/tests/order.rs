@@ -20,6 +20,7 @@ fn op(id: u32, feature: u32, tool: &str, x: f64) -> Operation {
         spindle_rpm: 1.0,
         start: DVec3::new(x, 0.0, 0.0),
         moves: vec![],
+        schedule: Schedule::WithFeature,
         provenance: Provenance::new(ProvenanceSource::Default, "t"),
         link_z: None,
     }
@@ -204,12 +205,13 @@ fn rest_passes_run_before_the_features_below_them() {
     plan.operations.push(op(2, 2, "A", 500.0));
     let rest = |id: u32, feature: u32, orphan: bool| {
         let mut o = op(id, feature, "B", 0.0);
-        o.provenance
-            .values
-            .insert(thinplan_operations::RUN_LAST.into(), 1.0);
-        if orphan {
-            o.provenance.values.insert("orphan_stretches".into(), 1.0);
-        }
+        o.schedule = if orphan {
+            Schedule::AtEnd {
+                covered_within_mm: None,
+            }
+        } else {
+            Schedule::AfterFeature
+        };
         o
     };
     plan.operations.push(rest(3, 0, false));

@@ -147,11 +147,66 @@ fn migrate_1_to_2(value: &mut Value) {
     }
 }
 
+/// Version 3 gave machining features their origin (`origin`: the rule
+/// that made them and their step role) and `access_blocked`, and operations
+/// their `schedule`, as typed fields; a v2 plan recorded them only in the
+/// provenance, from which they are read here, once.
+fn migrate_2_to_3(value: &mut Value) {
+    let flag = |p: &Value, key: &str| p.pointer(&format!("/values/{key}")).and_then(Value::as_f64);
+    if let Some(features) = value
+        .get_mut("machining_features")
+        .and_then(Value::as_array_mut)
+    {
+        for f in features {
+            let p = f.get("provenance").cloned().unwrap_or(Value::Null);
+            let rule = p.get("rule").and_then(Value::as_str).unwrap_or("");
+            let mut origin = serde_json::Map::new();
+            origin.insert("rule".into(), Value::from(rule));
+            if let Some(large) = flag(&p, "large") {
+                origin.insert("large".into(), Value::from(large > 0.5));
+            }
+            if let Some(obj) = f.as_object_mut() {
+                obj.entry("origin").or_insert(Value::Object(origin));
+                if flag(&p, "access_blocked") == Some(1.0) {
+                    obj.entry("access_blocked").or_insert(Value::from(true));
+                }
+            }
+        }
+    }
+    if let Some(ops) = value.get_mut("operations").and_then(Value::as_array_mut) {
+        for o in ops {
+            let p = o.get("provenance").cloned().unwrap_or(Value::Null);
+            let rule = p.get("rule").and_then(Value::as_str).unwrap_or("");
+            let at_end = |within: Option<f64>| {
+                let mut m = serde_json::Map::new();
+                if let Some(w) = within {
+                    m.insert("covered_within_mm".into(), Value::from(w));
+                }
+                serde_json::json!({ "at_end": m })
+            };
+            let schedule = if flag(&p, "orphan_stretches").is_some() {
+                Some(at_end(None))
+            } else if flag(&p, "after_every_feature") == Some(1.0) {
+                Some(at_end(flag(&p, "min_left_mm")))
+            } else if rule.ends_with(".rest_pass") || flag(&p, "run_last") == Some(1.0) {
+                Some(Value::from("after_feature"))
+            } else {
+                None
+            };
+            if let (Some(s), Some(obj)) = (schedule, o.as_object_mut()) {
+                obj.entry("schedule").or_insert(s);
+            }
+        }
+    }
+}
+
 pub fn migrate(value: &mut Value, from: u64) {
     let mut v = from;
     while v < SCHEMA_VERSION as u64 {
-        if v == 1 {
-            migrate_1_to_2(value);
+        match v {
+            1 => migrate_1_to_2(value),
+            2 => migrate_2_to_3(value),
+            _ => {}
         }
         v += 1;
     }

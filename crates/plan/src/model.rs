@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 /// The schema version this build writes. Older versions are migrated on load
 /// (see [`crate::io::migrate`]).
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 macro_rules! id_type {
     ($(#[$m:meta])* $name:ident, $prefix:literal) => {
@@ -358,12 +358,63 @@ pub struct MachiningFeature {
     /// Adjacency per edge of each hole (island), in `shape.region.holes` order.
     pub hole_adjacency: Vec<Vec<Adjacency>>,
     pub bottom_adjacency: Adjacency,
+    /// What made the feature (stage 5); later stages select on it.
+    #[serde(default)]
+    pub origin: FeatureOrigin,
+    /// The part covers the feature from the tool side (stage 6): it cannot
+    /// be machined in this set-up.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub access_blocked: bool,
     /// Where product faces beside the feature slope (sloped slabs, stage
     /// 6): how far each product edge's face lies beyond it at the slab's
     /// bottom and top. Absent where every product face is vertical.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub slopes: Option<EdgeSlopes>,
     pub provenance: Provenance,
+}
+
+/// What made a machining feature: the knowledge rule and the feature's role
+/// in its step. Stages select on these typed fields; the provenance beside
+/// them explains the decision and is never read back.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeatureOrigin {
+    /// The knowledge rule that made it (`strategies.<block>`, an influence
+    /// block); empty for a feature made by hand.
+    pub rule: String,
+    /// The large (`true`) or small (`false`) feature of a step (thesis
+    /// §4.1.2); `None` for a feature that is not one side of a step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub large: Option<bool>,
+}
+
+/// When stage 8 runs an operation, relative to the order of the features.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Schedule {
+    /// With its feature, in the features' order.
+    #[default]
+    WithFeature,
+    /// A rest pass: after its feature's other operations, grouped by tool
+    /// with the other rest passes, but before any operation whose feature
+    /// lies below it (that tool's shank would pass up through what the rest
+    /// pass has still to cut).
+    AfterFeature,
+    /// At the end of the program: a pass planned as if every other feature
+    /// were gone (wall stretches no operation of their own features reached,
+    /// a wall rest pass with the feature's own tool).
+    AtEnd {
+        /// Stage 7 drops the pass when other operations already cut every
+        /// point of its boundary to within this much (mm); `None`: never.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        covered_within_mm: Option<f64>,
+    },
+}
+
+impl Schedule {
+    pub fn is_with_feature(&self) -> bool {
+        *self == Schedule::WithFeature
+    }
 }
 
 /// The product faces beside a machining feature's edges, sampled at
@@ -509,6 +560,9 @@ pub struct Operation {
     pub spindle_rpm: f64,
     pub start: DVec3,
     pub moves: Vec<PathMove>,
+    /// When stage 8 runs it relative to the features' order.
+    #[serde(default, skip_serializing_if = "Schedule::is_with_feature")]
+    pub schedule: Schedule,
     pub provenance: Provenance,
     /// Where stage 8 planned the link from the previous operation (same
     /// tool) on the in-process stock: the height along up (part

@@ -197,3 +197,35 @@ fn version_1_features_gain_hole_adjacency() {
     );
     assert_eq!(f.side_adjacency.len(), 4);
 }
+
+/// A v2 plan (hand-written: v2 kept a feature's origin and access and an
+/// operation's schedule only in the provenance) migrates to the typed
+/// fields: what stages 6–8 read is the same as what they read before.
+#[test]
+fn version_2_provenance_becomes_typed_fields() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/plan_v2_provenance.json");
+    let plan = load(&path).unwrap();
+    assert_eq!(plan.schema_version, SCHEMA_VERSION);
+    let f = &plan.machining_features;
+    assert_eq!(f[0].origin.rule, "strategies.wall_steps");
+    assert_eq!(f[0].origin.large, Some(true));
+    assert!(!f[0].access_blocked);
+    assert_eq!(f[1].origin.rule, "resolve.remaining");
+    assert_eq!(f[1].origin.large, None);
+    assert!(f[1].access_blocked);
+    let s: Vec<Schedule> = plan.operations.iter().map(|o| o.schedule).collect();
+    assert_eq!(
+        s,
+        vec![
+            Schedule::WithFeature,
+            Schedule::AfterFeature,
+            Schedule::AfterFeature,
+            Schedule::AtEnd {
+                covered_within_mm: None
+            },
+            Schedule::AtEnd {
+                covered_within_mm: Some(0.25)
+            },
+        ]
+    );
+}

@@ -23,9 +23,9 @@ use glam::DVec3;
 use thinplan_brep::{Brep, Frame};
 use thinplan_knowledge::{FeatureSelector, Knowledge, RemainingOwner, ShallowSlabs, TieBreak};
 use thinplan_plan::{
-    Adjacency, Constraint, ConstraintKind, EdgeSlopes, MachiningFeature, MachiningFeatureId, Plan,
-    Prism, PrismFrame, ProfileLoop, Provenance, ProvenanceSource, Refusal, Region, Stage,
-    StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
+    Adjacency, Constraint, ConstraintKind, EdgeSlopes, FeatureOrigin, MachiningFeature,
+    MachiningFeatureId, Plan, Prism, PrismFrame, ProfileLoop, Provenance, ProvenanceSource,
+    Refusal, Region, Stage, StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
 };
 
 mod beyond;
@@ -374,6 +374,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
         let area = section::shape_area(&p.region);
         let vol = area * (p.hi - p.lo);
         out.volumes.features += vol;
+        let mut origin = FeatureOrigin::default();
         let provenance = match p.claim {
             Some(ci) => {
                 let c = &claims[ci];
@@ -383,6 +384,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
                     .iter()
                     .find(|f| f.id == c.from)
                     .expect("claims come from features");
+                origin = original.origin.clone();
                 let mut prov = original.provenance.clone();
                 prov.values
                     .insert("determined_as".into(), f64::from(c.from.0));
@@ -409,6 +411,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
             }
             None => {
                 out.volumes.remaining += vol;
+                origin.rule = RULE_REMAINING.into();
                 let mut prov = Provenance::new(ProvenanceSource::Knowledge, RULE_REMAINING)
                     .with_value("owner", f64::from(p.owner.0));
                 prov.note = format!(
@@ -432,6 +435,8 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
             side_adjacency: Vec::new(),
             hole_adjacency: Vec::new(),
             bottom_adjacency: Adjacency::Open,
+            origin,
+            access_blocked: false,
             slopes: None,
             provenance,
         });
@@ -793,9 +798,8 @@ fn selects(sel: &FeatureSelector, f: &MachiningFeature) -> bool {
     match sel {
         FeatureSelector::Any => true,
         FeatureSelector::Block { block, large } => {
-            f.provenance.rule == format!("strategies.{block}")
-                && large
-                    .is_none_or(|l| f.provenance.values.get("large").map(|v| *v > 0.5) == Some(l))
+            f.origin.rule == format!("strategies.{block}")
+                && large.is_none_or(|l| f.origin.large == Some(l))
         }
     }
 }
@@ -1204,6 +1208,7 @@ fn blocked_from_up(geo: &[Geo], slabs: &[Slab], sliver: f64, out: &mut Resolutio
             .fold(0.0, f64::max);
         if covered > sliver {
             let f = &mut out.features[i];
+            f.access_blocked = true;
             f.provenance.values.insert("access_blocked".into(), 1.0);
             f.provenance.note = format!(
                 "{}; the part covers {covered:.2} mm² of it from above: not reachable along up",

@@ -15,18 +15,14 @@ use crate::{escape, num, owner_colour};
 
 /// What a feature is, from the knowledge block that made it.
 fn kind_of(f: &thinplan_plan::MachiningFeature) -> String {
-    let block = f
-        .provenance
-        .rule
-        .rsplit('.')
-        .next()
-        .unwrap_or_default()
-        .replace('_', " ");
-    match f.provenance.values.get("large") {
-        Some(l) if f.provenance.rule.ends_with("wall_steps") => {
-            (if *l == 1.0 { "large" } else { "small" }).to_string()
-        }
-        _ => block,
+    let rule = &f.origin.rule;
+    match f.origin.large {
+        Some(l) if rule.ends_with("wall_steps") => (if l { "large" } else { "small" }).to_string(),
+        _ => rule
+            .rsplit('.')
+            .next()
+            .unwrap_or_default()
+            .replace('_', " "),
     }
 }
 

@@ -6,7 +6,7 @@
 
 use glam::DVec2;
 use thinplan_knowledge::{BottomLayer, Method, SlopedFaces, Tool};
-use thinplan_plan::{Adjacency, MachiningFeature, Provenance};
+use thinplan_plan::{Adjacency, MachiningFeature, Provenance, Schedule};
 
 use super::boundary::{boundary_region, Boundary};
 use super::levels::{bottom_layer_op, heights, level_op, Heights};
@@ -296,6 +296,7 @@ impl<'b> BandPlan<'b> {
             feed_link: self.feed_rough * self.env.k.methods.link_feed_factor,
             start: moves.start,
             moves: moves.moves,
+            schedule: Schedule::WithFeature,
             provenance: prov,
         }
     }

@@ -27,12 +27,11 @@ mod tool_choice;
 use cavalier_contours::polyline::PlineSource;
 use glam::{DVec2, DVec3};
 use thinplan_knowledge::{Knowledge, Machine, Material, Tool, ToolSet};
-use thinplan_plan::{Adjacency, MachiningFeature, Provenance};
+use thinplan_plan::{Adjacency, MachiningFeature, Provenance, Schedule};
 
 use crate::geom::{adjacency_edges, pline_from_edges, Edge2};
 use crate::path::LMove;
 
-pub(crate) use rest_passes::ORPHAN;
 pub(crate) use shank::feature_operations;
 
 /// What planning a feature needs: the knowledge, the set-up's tools,
@@ -79,6 +78,8 @@ pub(crate) struct LocalOp {
     pub feed_link: f64,
     pub start: DVec3,
     pub moves: Vec<LMove>,
+    /// When stage 8 runs it (rest passes after their feature or at the end).
+    pub schedule: Schedule,
     pub provenance: Provenance,
 }
 

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 
 use glam::{DVec2, DVec3};
 use thinplan_knowledge::{Method, RestPass, Tool, WallRest};
-use thinplan_plan::{Adjacency, MachiningFeature, Provenance, ProvenanceSource};
+use thinplan_plan::{Adjacency, MachiningFeature, Provenance, ProvenanceSource, Schedule};
 
 use super::boundary::{boundary_chains, boundary_pass, entered_from_room};
 use super::entries::{go_to, retract};
@@ -83,7 +83,7 @@ fn disc_samples(p: DVec2, r: f64) -> impl Iterator<Item = DVec2> {
 
 /// Provenance value (1) of a wall rest pass for orphan stretches
 /// ([`Rest::Orphan`]).
-pub(crate) const ORPHAN: &str = "orphan_stretches";
+const ORPHAN: &str = "orphan_stretches";
 
 /// Which rest pass: the fillet at a product floor, or stretches of product
 /// walls the feature's tool could not come beside.
@@ -214,8 +214,26 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
         feed_link: feed_rough * mk.link_feed_factor,
         start: b.start,
         moves: b.moves,
+        schedule: rest_schedule(rest, rt.own),
         provenance: prov,
     }))
+}
+
+/// When stage 8 runs a rest pass: one planned with every other feature
+/// gone at the end (a pass with the feature's own tool dropped where other
+/// operations cut its boundary already), a deferred wall rest or a floor
+/// rest pass after its feature, any other wall rest with its feature.
+fn rest_schedule(rest: Rest, own: bool) -> Schedule {
+    match rest {
+        Rest::Orphan(..) => Schedule::AtEnd {
+            covered_within_mm: None,
+        },
+        Rest::Wall(w) if own => Schedule::AtEnd {
+            covered_within_mm: Some(w.min_left),
+        },
+        Rest::Wall(w) if !w.run_last => Schedule::WithFeature,
+        Rest::Wall(_) | Rest::Floor(_) => Schedule::AfterFeature,
+    }
 }
 
 /// The tools a rest pass may use, best first: for the floor those whose
@@ -464,7 +482,7 @@ fn rest_provenance(
                 v.insert("after_every_feature".into(), 1.0);
             }
             if w.run_last {
-                v.insert(crate::RUN_LAST.into(), 1.0);
+                v.insert("run_last".into(), 1.0);
             }
             v.insert("depth_of_cut_mm".into(), wall_depth);
             prov.note = format!(
@@ -480,7 +498,7 @@ fn rest_provenance(
         }
         Rest::Orphan(w, _) => {
             v.insert("min_left_mm".into(), w.min_left);
-            v.insert(crate::RUN_LAST.into(), 1.0);
+            v.insert("run_last".into(), 1.0);
             v.insert(ORPHAN.into(), 1.0);
             v.insert("depth_of_cut_mm".into(), wall_depth);
             prov.note = format!(

@@ -600,6 +600,8 @@ mod tests {
                     side,
                     holes: Vec::new(),
                 }),
+                origin: Default::default(),
+                access_blocked: false,
                 provenance: Provenance::new(ProvenanceSource::Default, "test"),
             };
             // The free space at the slab's middle: a box less the flange.

@@ -92,6 +92,8 @@ pub fn feature(
         hole_adjacency,
         bottom_adjacency: bottom,
         slopes: None,
+        origin: Default::default(),
+        access_blocked: false,
         provenance: Provenance::new(ProvenanceSource::Default, "test"),
     }
 }

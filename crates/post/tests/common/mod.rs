@@ -72,6 +72,7 @@ pub fn op(id: u32, tool: &str, rpm: f64, start: [f64; 3], moves: Vec<PathMove>) 
         spindle_rpm: rpm,
         start: DVec3::from(start),
         moves,
+        schedule: Default::default(),
         provenance: Provenance::new(ProvenanceSource::Default, "test"),
         link_z: None,
     }
