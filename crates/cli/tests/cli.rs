@@ -698,7 +698,7 @@ fn plan_writes_the_setup_sheet_and_reports_collisions() {
 /// The programs thinplan writes read cleanly in LinuxCNC's own interpreter
 /// (`rs274`, tools/peers/linuxcnc) and its canonical moves have the lengths
 /// our independent stock-simulation reader finds, within 0.1 %. Skipped
-/// with a note when the peer is not installed.
+/// with a note when the peer is not installed, a failure in CI.
 #[test]
 fn programs_read_cleanly_in_linuxcnc_rs274() {
     let root = std::env::var_os("THINPLAN_LINUXCNC")
@@ -708,7 +708,7 @@ fn programs_read_cleanly_in_linuxcnc_rs274() {
                 .join(".cache/thinplan-linuxcnc")
         });
     if !root.join("usr/bin/rs274").is_file() {
-        eprintln!("skip: rs274 not installed (bash tools/peers/linuxcnc/setup.sh)");
+        thinplan_testdata::missing("rs274 (bash tools/peers/linuxcnc/setup.sh)");
         return;
     }
     for name in ["tall_rib", "wing_rib"] {

@@ -23,9 +23,8 @@ fn peer_root() -> Option<PathBuf> {
 
 fn check(plan: &thinplan_plan::Plan, tag: &str) {
     let Some(root) = peer_root() else {
-        eprintln!(
-            "skipped: rs274 is not installed (bash tools/peers/linuxcnc/setup.sh puts it in \
-             ~/.cache/thinplan-linuxcnc)"
+        thinplan_testdata::missing(
+            "rs274 (bash tools/peers/linuxcnc/setup.sh puts it in ~/.cache/thinplan-linuxcnc)",
         );
         return;
     };

@@ -10,7 +10,7 @@ fn check_dir(name: &str, expect_units: Option<&[&str]>) {
     };
     let dir = dir.as_path();
     let Ok(rd) = std::fs::read_dir(dir) else {
-        println!("note: {} is missing; skipped", dir.display());
+        thinplan_testdata::missing(&dir.display().to_string());
         return;
     };
     let mut files: Vec<_> = rd
@@ -104,7 +104,7 @@ fn mfcad_face_names_kept() {
     };
     let path = &dir.join("0-0-0-0-13-23.step");
     if !path.exists() {
-        println!("note: {} is missing; skipped", path.display());
+        thinplan_testdata::missing(&path.display().to_string());
         return;
     }
     let m = read_step_file(path).unwrap();

@@ -7,7 +7,9 @@
 //! 3. `/work/shared/data`.
 //!
 //! Tests that need the data print a note and pass vacuously when none is
-//! found, so the suite still runs on a machine without it; CI machines have it.
+//! found, so the suite still runs on a developer's machine without it; with
+//! `CI` set (`.ci/run` sets it) a missing file or peer fails the test
+//! instead ([`missing`]), so a CI machine without them cannot go green.
 
 use std::path::{Path, PathBuf};
 
@@ -32,14 +34,23 @@ pub fn shared_data() -> Option<PathBuf> {
         .find(|p| p.join("mfcad").is_dir() || p.join("aagnet").is_dir())
 }
 
+/// Reports test data or a peer program that is not there: a note and a
+/// vacuous pass on a developer's machine, a failure when `CI` is set.
+pub fn missing(what: &str) {
+    if std::env::var_os("CI").is_some_and(|v| !v.is_empty()) {
+        panic!("{what} is missing, and CI must not skip the test that needs it");
+    }
+    eprintln!("note: {what} is missing; skipped");
+}
+
 /// A sub-directory of the external data (`"mfcad"`, `"aagnet"`), if present;
-/// prints a note naming what is missing otherwise.
+/// reports it [`missing`] otherwise.
 pub fn data_dir(name: &str) -> Option<PathBuf> {
     let d = shared_data().map(|d| d.join(name)).filter(|d| d.is_dir());
     if d.is_none() {
-        eprintln!(
-            "note: external test data `{name}` not found (set THINPLAN_DATA or place it at ../shared/data); skipped"
-        );
+        missing(&format!(
+            "external test data `{name}` (set THINPLAN_DATA or place it at ../shared/data)"
+        ));
     }
     d
 }
