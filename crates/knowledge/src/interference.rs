@@ -41,6 +41,12 @@ pub struct InterferenceKnowledge {
     /// tool's flute length above the other's bottom (the shank would rub
     /// it).
     pub shank_access: bool,
+    /// Remaining material too narrow for the set-up's smallest tool
+    /// (nothing of it is left inset by the tool's radius) is cut with the
+    /// claimed piece it borders longest in the same slab, instead of
+    /// becoming a feature no tool enters on its own (the strip a web's
+    /// layers leave beside its floor fillets).
+    pub join_narrow_remaining: bool,
 }
 
 /// Slab thickness by the slope of the faces a slab crosses: a slab ends

@@ -13,6 +13,8 @@ use glam::{DVec2, DVec3};
 use i_overlay::core::fill_rule::FillRule;
 use i_overlay::core::overlay_rule::OverlayRule;
 use i_overlay::float::single::SingleFloatOverlay;
+use i_overlay::mesh::float::outline::offset::OutlineOffset;
+use i_overlay::mesh::float::style::OutlineStyle;
 
 /// A set of polygons with holes: each shape is an outer contour
 /// (counter-clockwise) followed by its holes (clockwise).
@@ -140,6 +142,14 @@ pub fn union(a: &Shapes, b: &Shapes) -> Shapes {
         return a.clone();
     }
     a.overlay_as::<i64>(b, OverlayRule::Union, FillRule::NonZero)
+}
+
+/// The region grown (`d > 0`) or shrunk (`d < 0`) by `|d|`.
+pub fn offset(s: &Shapes, d: f64) -> Shapes {
+    if s.is_empty() {
+        return Vec::new();
+    }
+    s.outline(&OutlineStyle::new(d))
 }
 
 /// Signed area of a contour (positive counter-clockwise).
