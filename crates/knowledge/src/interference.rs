@@ -43,10 +43,11 @@ pub struct InterferenceKnowledge {
     pub shank_access: bool,
     /// Remaining material too narrow for the set-up's smallest tool
     /// (nothing of it is left inset by the tool's radius) is cut with the
-    /// claimed piece it borders longest in the same slab, instead of
-    /// becoming a feature no tool enters on its own (the strip a web's
-    /// layers leave beside its floor fillets).
-    pub join_narrow_remaining: bool,
+    /// piece it borders longest in the same slab among the features these
+    /// select, instead of becoming a feature no tool enters on its own
+    /// (the strip a web's layers leave beside its floor fillets). Empty:
+    /// narrow remaining material stays a feature of its own.
+    pub narrow_remaining_joins: Vec<FeatureSelector>,
 }
 
 /// Slab thickness by the slope of the faces a slab crosses: a slab ends

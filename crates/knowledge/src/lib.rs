@@ -511,8 +511,33 @@ fn validate(
 ) -> Vec<KnowledgeError> {
     let mut errors = Vec::new();
     // Rules that name a strategy block must name one that exists.
-    for (i, r) in k.interference.keep_order.iter().enumerate() {
-        if let FeatureSelector::Block { block, .. } = &r.select {
+    let selectors = k
+        .interference
+        .keep_order
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            (
+                at!["keep_order", i, "select", "block"],
+                format!("keep_order rule `{}`", r.id),
+                &r.select,
+            )
+        })
+        .chain(
+            k.interference
+                .narrow_remaining_joins
+                .iter()
+                .enumerate()
+                .map(|(i, s)| {
+                    (
+                        at!["narrow_remaining_joins", i, "block"],
+                        format!("narrow_remaining_joins entry {}", i + 1),
+                        s,
+                    )
+                }),
+        );
+    for (place, what, select) in selectors {
+        if let FeatureSelector::Block { block, .. } = select {
             let known = k
                 .strategies
                 .strategies
@@ -521,15 +546,14 @@ fn validate(
                 .any(|b| b.id() == block);
             if !known {
                 let reason = format!(
-                    "keep_order rule `{}` selects block `{block}`, which no strategy in strategies.ron has",
-                    r.id
+                    "{what} selects block `{block}`, which no strategy in strategies.ron has"
                 );
                 errors.push(match interference {
                     Some((path, text)) => KnowledgeError::at_value(
                         path,
                         text,
                         Problem {
-                            at: at!["keep_order", i, "select", "block"],
+                            at: place,
                             message: reason,
                         },
                     ),

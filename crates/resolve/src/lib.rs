@@ -135,6 +135,9 @@ struct Claim {
     hi: f64,
     rank: (usize, f64, u32),
     rule: String,
+    /// Narrow remaining material beside it may join it
+    /// (`narrow_remaining_joins`).
+    takes_narrow: bool,
 }
 
 /// One slab of the blank with the part's section in it.
@@ -235,10 +238,9 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
     let mut lost: BTreeMap<(usize, usize), f64> = BTreeMap::new();
     // Remaining material joined to a claim, mm³ per claim.
     let mut joined: BTreeMap<usize, f64> = BTreeMap::new();
-    let narrow_radius = kn
-        .join_narrow_remaining
-        .then(|| k.tool_set(&plan.setup.tool_set))
-        .flatten()
+    let narrow_radius = k
+        .tool_set(&plan.setup.tool_set)
+        .filter(|_| !kn.narrow_remaining_joins.is_empty())
         .and_then(|set| {
             set.tools
                 .iter()
@@ -279,7 +281,21 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
                 taken.push((ci, bbox_of(&piece), piece));
             }
         }
-        let all_taken: Shapes = taken.iter().flat_map(|(_, _, s)| s.clone()).collect();
+        // The pieces narrow remaining material may join.
+        let mut joinable: Vec<(usize, [f64; 4], Shapes)> = Vec::new();
+        let mut others = Vec::new();
+        for t in taken {
+            if claims[t.0].takes_narrow {
+                joinable.push(t);
+            } else {
+                others.push(t);
+            }
+        }
+        let all_taken: Shapes = joinable
+            .iter()
+            .chain(&others)
+            .flat_map(|(_, _, s)| s.clone())
+            .collect();
         let all_taken = section::fill(&all_taken.into_iter().flatten().collect::<Vec<_>>());
         let rem = section::difference(&removal, &all_taken);
         let (mut keep, drop): (Shapes, Shapes) = rem
@@ -287,11 +303,11 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
             .partition(|s| section::shape_area(s) > kn.sliver_area);
         out.volumes.slivers += section::area(&drop) * (slab.hi - slab.lo);
         if let Some(r) = narrow_radius {
-            for (ci, a) in join_narrow(&mut keep, &mut taken, r, kn.sliver_area) {
+            for (ci, a) in join_narrow(&mut keep, &mut joinable, r, kn.sliver_area) {
                 *joined.entry(ci).or_default() += a * (slab.hi - slab.lo);
             }
         }
-        for (ci, _, piece) in taken {
+        for (ci, _, piece) in joinable.into_iter().chain(others) {
             claim_slabs[ci].push((si, piece));
         }
         if !keep.is_empty() {
@@ -864,6 +880,7 @@ fn claims(
             hi,
             rank: (rule_rank, tie, f.id.0),
             rule,
+            takes_narrow: kn.narrow_remaining_joins.iter().any(|s| selects(s, f)),
         });
     }
     out
