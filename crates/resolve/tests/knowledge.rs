@@ -159,3 +159,36 @@ fn the_keep_order_decides_who_keeps_an_overlap() {
         "{small_reversed} vs {small_default}"
     );
 }
+
+#[test]
+fn narrow_remaining_joins_names_blocks_that_exist() {
+    let d = copy_knowledge("joins");
+    edit(
+        &d,
+        "narrow_remaining_joins: [Block(block: \"web_face_mill\", large: None)]",
+        "narrow_remaining_joins: [Block(block: \"web_face_mil\", large: None)]",
+    );
+    let e = errors(&d);
+    assert!(
+        e.contains("narrow_remaining_joins")
+            && e.contains("web_face_mil")
+            && e.contains("no strategy"),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(d.join("interference.ron")).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.contains("web_face_mil\""))
+        .unwrap()
+        + 1;
+    assert!(e.contains(&format!("{line}:")), "line {line} not in {e}");
+    // Empty: narrow remaining material stays a feature of its own.
+    let d = copy_knowledge("no-joins");
+    edit(
+        &d,
+        "narrow_remaining_joins: [Block(block: \"web_face_mill\", large: None)]",
+        "narrow_remaining_joins: []",
+    );
+    let k = Knowledge::load_dir(&d).expect("loads with none");
+    assert!(k.interference.narrow_remaining_joins.is_empty());
+}
