@@ -18,9 +18,6 @@ use thinplan_plan::{
 
 use crate::{area2, prism_points, span, Ctx, Determination, WallGeom, EPS, RULE_PREFIX};
 
-/// |normal · up| below this: not a web this block can face-mill.
-const MIN_COS: f64 = 0.9;
-
 pub(crate) fn face_mill(
     ctx: &Ctx,
     sf: &StiffnessFeature,
@@ -30,10 +27,12 @@ pub(crate) fn face_mill(
 ) -> Vec<MachiningFeatureId> {
     let rule = format!("{RULE_PREFIX}{}", b.id);
     let c = g.n.dot(ctx.up);
-    if c.abs() < MIN_COS {
+    let tilt = c.abs().clamp(0.0, 1.0).acos().to_degrees();
+    if tilt > b.max_tilt_deg {
         out.warnings.push(format!(
-            "{}: a web that is not horizontal (normal·up = {c:.3}); not face-milled",
-            sf.id
+            "{}: a web tilted {tilt:.1}° from the spindle axis, more than block `{}` \
+             face-mills ({:.1}°); not face-milled",
+            sf.id, b.id, b.max_tilt_deg
         ));
         return Vec::new();
     }

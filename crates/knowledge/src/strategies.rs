@@ -160,6 +160,9 @@ pub struct WebFaceMill {
     pub id: String,
     /// Depth of one layer along the spindle axis (mm).
     pub layer_depth: f64,
+    /// Largest angle between the web's normal and the spindle axis this
+    /// block face-mills (degrees); a web tilted more is left with a warning.
+    pub max_tilt_deg: f64,
 }
 
 /// Figure 4.6: a flange's machining features beside the web it stands on
@@ -456,6 +459,14 @@ impl StrategyKnowledge {
                             f.layer_depth,
                             Range::closed(0.01, 1000.0),
                             " mm",
+                        );
+                        c.range(
+                            here("max_tilt_deg"),
+                            &p,
+                            "max_tilt_deg",
+                            f.max_tilt_deg,
+                            Range::closed(0.0, 89.0),
+                            "°",
                         );
                     }
                 }

@@ -172,6 +172,12 @@ fn values_in_every_root_file_point_at_their_line() {
             "block `web_face_mill`: layer_depth 0 must lie in [0.01, 1000]",
         ),
         (
+            "strategies.ron",
+            "max_tilt_deg: 25.84",
+            "max_tilt_deg: 95.0",
+            "block `web_face_mill`: max_tilt_deg 95 must lie in [0, 89]",
+        ),
+        (
             "sequencing.ron",
             "within_deg: 20.0",
             "within_deg: 70.0",
