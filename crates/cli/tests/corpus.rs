@@ -256,6 +256,18 @@ fn judge(planned: &[Planned], checked: &serde_json::Map<String, Value>) -> Vec<S
     failures
 }
 
+/// The checker finds at most 1 mm³ missed on `name`.
+fn assert_checker_missed_at_most_1(checked: &serde_json::Map<String, Value>, name: &str) {
+    let missed = checked[name]
+        .pointer("/missed/volume")
+        .and_then(Value::as_f64)
+        .unwrap();
+    assert!(
+        missed <= 1.0,
+        "{name}: the checker finds {missed:.2} mm3 missed"
+    );
+}
+
 fn summary(planned: &[Planned]) -> String {
     let count = |v: &str| {
         planned
@@ -524,14 +536,7 @@ fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
     let checked = check(&py, &out, &corpus, &lib);
     let failures = judge(std::slice::from_ref(&p), &checked);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    let missed = checked[name]
-        .pointer("/missed/volume")
-        .and_then(Value::as_f64)
-        .unwrap();
-    assert!(
-        missed <= 1.0,
-        "{name}: the checker finds {missed:.2} mm3 missed"
-    );
+    assert_checker_missed_at_most_1(&checked, name);
 }
 
 /// An egg crate whose ribs cross in filleted corners: the Ø20 stops 10 mm
@@ -594,14 +599,7 @@ fn a_rapid_that_meets_stock_sends_the_links_over_the_top_not_the_operation_away(
     let checked = check(&py, &out, &corpus, &lib);
     let failures = judge(std::slice::from_ref(&p), &checked);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    let missed = checked[name]
-        .pointer("/missed/volume")
-        .and_then(Value::as_f64)
-        .unwrap();
-    assert!(
-        missed <= 1.0,
-        "{name}: the checker finds {missed:.2} mm3 missed"
-    );
+    assert_checker_missed_at_most_1(&checked, name);
 }
 
 /// A frame whose outer wall stands on a floor fillet: a slab at the
@@ -632,12 +630,5 @@ fn an_edge_on_a_vertical_face_reads_that_face_at_every_height() {
     let checked = check(&py, &out, &corpus, &lib);
     let failures = judge(std::slice::from_ref(&p), &checked);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    let missed = checked[name]
-        .pointer("/missed/volume")
-        .and_then(Value::as_f64)
-        .unwrap();
-    assert!(
-        missed <= 1.0,
-        "{name}: the checker finds {missed:.2} mm3 missed"
-    );
+    assert_checker_missed_at_most_1(&checked, name);
 }
