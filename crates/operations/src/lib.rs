@@ -16,6 +16,7 @@
 mod breakthrough;
 mod caps;
 mod coverage;
+mod covered;
 mod free;
 pub mod geom;
 mod layers;
@@ -222,6 +223,11 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
         .collect();
     let mut made: Vec<Option<Result<layers::Made, String>>> =
         (0..plan.machining_features.len()).map(|_| None).collect();
+    // Features that get no operation and cover each feature from the tool
+    // side (directly or through others), with the reason the first gave.
+    let n = plan.machining_features.len();
+    let mut covering: Vec<std::collections::BTreeSet<usize>> = vec![Default::default(); n];
+    let mut cover_reason: Vec<Option<(String, bool)>> = vec![None; n];
     loop {
         for (i, f) in plan.machining_features.iter().enumerate() {
             if made[i].is_some() || skipped.contains_key(&i) {
@@ -229,81 +235,69 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
             }
             let free = free::free_space(plan, i, 2.0 * d_max);
             let removed = free::removed_space(plan, i, 2.0 * d_max, &positions);
-            let obstacles = free::shank_obstacles(plan, i, d_max, min_flute, &shank_edges);
-            // A geometry library panicking on an awkward profile
-            // (cavalier_contours asserts on some degenerate offsets) refuses
-            // this feature, not the plan.
-            let attempt_on = |f: &thinplan_plan::MachiningFeature, env: &layers::Env| {
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    layers::feature_operations(f, env, free.as_ref(), removed.as_ref(), &obstacles)
-                }))
-                .unwrap_or_else(|_| {
-                    Err("the offset geometry failed on this profile (library panic)".into())
-                })
+            let mut obstacles = free::shank_obstacles(plan, i, d_max, min_flute, &shank_edges);
+            if covering[i].is_empty() {
+                made[i] = Some(feature_made(
+                    f,
+                    &env,
+                    free.as_ref(),
+                    removed.as_ref(),
+                    &obstacles,
+                    rest_reach,
+                ));
+                continue;
+            }
+            let reason = cover_reason[i].clone().unwrap_or_default();
+            let (Some(free), Some(removed)) = (free, removed) else {
+                skipped.insert(i, reason);
+                continue;
             };
-            let attempt = |env: &layers::Env| attempt_on(f, env);
-            let mut m = attempt(&env);
-            // No tool fits its own region: reach it from the space cut
-            // beside it (a pocket corner between the walls' steps).
-            if matches!(&m, Err(e) if e.starts_with(layers::NO_TOOL_FITS)) {
-                let grown = free
-                    .as_ref()
-                    .zip(removed.as_ref())
-                    .and_then(|(free, removed)| {
-                        rest::reached_from_beside(f, free, removed, rest_reach)
-                    });
-                if let Some(g) = grown {
-                    if let Ok(mut made) = attempt_on(&g, &env) {
-                        let note = format!(
-                            "reached from the space cut beside it (region grown by up to \
-                             {rest_reach:.3} mm: {:.1} → {:.1} mm²)",
-                            layers::region_area(f),
-                            layers::region_area(&g)
-                        );
-                        for op in &mut made.ops {
-                            op.provenance.note.push_str(&format!("; {note}"));
-                            op.provenance
-                                .values
-                                .insert("rest_reach_mm".into(), rest_reach);
-                        }
-                        made.warnings.insert(
-                            0,
-                            format!("{}: no tool fits its region alone; {note}", f.id),
-                        );
-                        m = Ok(made);
+            let keep = covered::footprint(covering[i].iter().map(|&j| &plan.machining_features[j]));
+            let (free, removed) = (covered::less(&free, &keep), covered::less(&removed, &keep));
+            let (pieces, under) = covered::uncovered(f, &keep, &free, &removed);
+            if pieces.is_empty() {
+                skipped.insert(i, reason);
+                continue;
+            }
+            obstacles.extend(covered::obstacles(plan, &covering[i]));
+            let mut whole = layers::Made::default();
+            let mut m = Ok(());
+            for piece in &pieces {
+                match feature_made(
+                    piece,
+                    &env,
+                    Some(&free),
+                    Some(&removed),
+                    &obstacles,
+                    rest_reach,
+                ) {
+                    Ok(p) => whole.absorb(p),
+                    Err(e) => {
+                        m = Err(e);
+                        break;
                     }
                 }
             }
-            // A path the safety net refused with one tool may pass with a
-            // smaller one: retry without the largest tools, one at a time.
-            let mut fewer = tools.clone();
-            while matches!(&m, Err(e) if !layers::is_unreachable(e)) && fewer.tools.len() > 1 {
-                let largest = fewer
-                    .tools
-                    .iter()
-                    .enumerate()
-                    .max_by(|a, b| {
-                        a.1.diameter
-                            .total_cmp(&b.1.diameter)
-                            .then_with(|| b.1.id.cmp(&a.1.id))
-                    })
-                    .map(|(k, _)| k)
-                    .expect("more than one tool");
-                let dropped = fewer.tools.remove(largest);
-                let first = m.as_ref().err().cloned().unwrap_or_default();
-                let sub = env.clone_with_tools(&fewer);
-                m = attempt(&sub);
-                if let Ok(made) = &mut m {
-                    made.warnings.insert(
-                        0,
-                        format!(
-                            "{}: without {} ({first}); a smaller tool is used",
-                            f.id, dropped.id
-                        ),
-                    );
-                }
-            }
-            made[i] = Some(m);
+            made[i] = Some(m.map(|()| {
+                let depth = (f.shape.z_max - f.shape.z_min).max(0.0);
+                whole.unreachable.insert(
+                    0,
+                    (
+                        format!("{}: {under:.1} mm² of it left: {}", f.id, reason.0),
+                        under * depth,
+                    ),
+                );
+                whole.warnings.insert(
+                    0,
+                    format!(
+                        "{}: planned on the {} piece(s) outside the features above it that \
+                         get no operation ({under:.1} mm² left)",
+                        f.id,
+                        pieces.len()
+                    ),
+                );
+                whole
+            }));
         }
         let mut changed = false;
         for c in &plan.machining_constraints {
@@ -311,23 +305,39 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
                 continue;
             }
             let (a, b) = (c.first.0 as usize, c.second.0 as usize);
+            if skipped.contains_key(&b) {
+                continue;
+            }
             let a_fails = skipped.contains_key(&a) || matches!(made[a], Some(Err(_)));
-            if a_fails && !skipped.contains_key(&b) {
+            let mut add = covering[a].clone();
+            if a_fails {
+                add.insert(a);
+            }
+            if add.is_subset(&covering[b]) {
+                continue;
+            }
+            if cover_reason[b].is_none() {
                 // Below material no tool reaches, the same holds.
                 let unreachable = match (&skipped.get(&a), &made[a]) {
                     (Some((_, u)), _) => *u,
                     (None, Some(Err(e))) => layers::is_unreachable(e),
-                    _ => false,
+                    _ => cover_reason[a].as_ref().is_some_and(|r| r.1),
+                };
+                let first = if a_fails {
+                    c.first
+                } else {
+                    plan.machining_features[*covering[a].iter().next().expect("not a subset")].id
                 };
                 let reason = if unreachable {
-                    format!("unreachable: {} above it is", c.first)
+                    format!("unreachable: {first} above it is")
                 } else {
-                    format!("{} above it gets no operation", c.first)
+                    format!("{first} above it gets no operation")
                 };
-                skipped.insert(b, (reason, unreachable));
-                made[b] = None;
-                changed = true;
+                cover_reason[b] = Some((reason, unreachable));
             }
+            covering[b].extend(add);
+            made[b] = None;
+            changed = true;
         }
         if !changed {
             break;
@@ -721,6 +731,90 @@ pub(crate) fn to_part(f: &thinplan_plan::MachiningFeature, c: DVec2, z: f64) -> 
 }
 
 /// A whole feature's volume (mm³): its region over its depth.
+/// A feature's operations: its own region first; where no tool fits it
+/// alone, reached from the space cut beside it; where the safety net
+/// refused the paths, with smaller tools.
+fn feature_made(
+    f: &thinplan_plan::MachiningFeature,
+    env: &layers::Env,
+    free: Option<&free::Shapes>,
+    removed: Option<&free::Shapes>,
+    obstacles: &[free::Obstacle],
+    rest_reach: f64,
+) -> Result<layers::Made, String> {
+    // A geometry library panicking on an awkward profile
+    // (cavalier_contours asserts on some degenerate offsets) refuses
+    // this feature, not the plan.
+    let attempt_on = |f: &thinplan_plan::MachiningFeature, env: &layers::Env| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            layers::feature_operations(f, env, free, removed, obstacles)
+        }))
+        .unwrap_or_else(|_| {
+            Err("the offset geometry failed on this profile (library panic)".into())
+        })
+    };
+    let attempt = |env: &layers::Env| attempt_on(f, env);
+    let mut m = attempt(env);
+    // No tool fits its own region: reach it from the space cut beside it
+    // (a pocket corner between the walls' steps).
+    if matches!(&m, Err(e) if e.starts_with(layers::NO_TOOL_FITS)) {
+        let grown = free
+            .zip(removed)
+            .and_then(|(free, removed)| rest::reached_from_beside(f, free, removed, rest_reach));
+        if let Some(g) = grown {
+            if let Ok(mut made) = attempt_on(&g, env) {
+                let note = format!(
+                    "reached from the space cut beside it (region grown by up to \
+                     {rest_reach:.3} mm: {:.1} → {:.1} mm²)",
+                    layers::region_area(f),
+                    layers::region_area(&g)
+                );
+                for op in &mut made.ops {
+                    op.provenance.note.push_str(&format!("; {note}"));
+                    op.provenance
+                        .values
+                        .insert("rest_reach_mm".into(), rest_reach);
+                }
+                made.warnings.insert(
+                    0,
+                    format!("{}: no tool fits its region alone; {note}", f.id),
+                );
+                m = Ok(made);
+            }
+        }
+    }
+    // A path the safety net refused with one tool may pass with a smaller
+    // one: retry without the largest tools, one at a time.
+    let mut fewer = env.tools.clone();
+    while matches!(&m, Err(e) if !layers::is_unreachable(e)) && fewer.tools.len() > 1 {
+        let largest = fewer
+            .tools
+            .iter()
+            .enumerate()
+            .max_by(|a, b| {
+                a.1.diameter
+                    .total_cmp(&b.1.diameter)
+                    .then_with(|| b.1.id.cmp(&a.1.id))
+            })
+            .map(|(k, _)| k)
+            .expect("more than one tool");
+        let dropped = fewer.tools.remove(largest);
+        let first = m.as_ref().err().cloned().unwrap_or_default();
+        let sub = env.clone_with_tools(&fewer);
+        m = attempt(&sub);
+        if let Ok(made) = &mut m {
+            made.warnings.insert(
+                0,
+                format!(
+                    "{}: without {} ({first}); a smaller tool is used",
+                    f.id, dropped.id
+                ),
+            );
+        }
+    }
+    m
+}
+
 fn feature_volume(f: &thinplan_plan::MachiningFeature) -> f64 {
     layers::region_area(f) * (f.shape.z_max - f.shape.z_min).max(0.0)
 }

@@ -114,6 +114,19 @@ pub(crate) fn reached_from_beside(
     if total <= own_area * (1.0 + 1e-6) {
         return None;
     }
+    Some(rebuilt(f, shape, free, removed))
+}
+
+/// `f` with its region replaced by `shape` (an outer contour then holes),
+/// every edge classified the way stage 6 does: product beyond `free`, open
+/// where `removed` (already cut), a feature otherwise; sloped product faces
+/// carried to the edges that lie on `f`'s own.
+pub(crate) fn rebuilt(
+    f: &MachiningFeature,
+    shape: &[Vec<[f64; 2]>],
+    free: &Shapes,
+    removed: &Shapes,
+) -> MachiningFeature {
     let (free_polys, removed_polys) = (polygons(free), polygons(removed));
     let classify = |c: &[[f64; 2]]| -> Vec<Adjacency> {
         let n = c.len();
@@ -155,7 +168,7 @@ pub(crate) fn reached_from_beside(
         g.shape.region.holes.push(ProfileLoop::polygon(&h));
     }
     g.slopes = carried_slopes(f, &g);
-    Some(g)
+    g
 }
 
 /// The sampled sloped faces of `f` carried to the edges of `g` that lie on

@@ -85,6 +85,7 @@ pub(crate) struct LocalOp {
 
 /// A feature's operations, with what it says about them and the material
 /// it leaves.
+#[derive(Default)]
 pub(crate) struct Made {
     pub ops: Vec<LocalOp>,
     pub warnings: Vec<String>,
@@ -94,6 +95,16 @@ pub(crate) struct Made {
     pub unreachable: Vec<(String, f64)>,
     /// Where the tool centre may go (sampled polygons of the tool-centre region).
     pub reach: Vec<Vec<DVec2>>,
+}
+
+impl Made {
+    /// Another piece's operations, warnings and material added to these.
+    pub(crate) fn absorb(&mut self, other: Made) {
+        self.ops.extend(other.ops);
+        self.warnings.extend(other.warnings);
+        self.unreachable.extend(other.unreachable);
+        self.reach.extend(other.reach);
+    }
 }
 
 /// How a refusal for lack of any tool that fits starts (stage 7 reports it

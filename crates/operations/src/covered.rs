@@ -1,0 +1,201 @@
+//! Material covered by features that get no operation.
+//!
+//! A feature that gets no operation (no tool fits it, another set-up
+//! reaches it, the safety net refused its paths) leaves its material
+//! standing, and so does every feature below it that is reached only
+//! through it. But a feature is rarely covered whole: a sliver in a pocket
+//! corner covers a square millimetre of the web below, not the web. The
+//! feature below is therefore planned on what of it lies outside the
+//! covering features' footprints; that footprint becomes stock the tool
+//! keeps out of (a product-like edge: no overhang) and is reported as
+//! unreachable, and the covering features stand as shank obstacles.
+
+use i_overlay::core::fill_rule::FillRule;
+use i_overlay::core::overlay_rule::OverlayRule;
+use i_overlay::float::single::SingleFloatOverlay;
+use thinplan_plan::{MachiningFeature, Plan};
+
+use crate::free::{self, Obstacle, Shapes};
+
+fn area(shapes: &Shapes) -> f64 {
+    let ring = |c: &Vec<[f64; 2]>| {
+        let n = c.len();
+        ((0..n)
+            .map(|i| c[i][0] * c[(i + 1) % n][1] - c[(i + 1) % n][0] * c[i][1])
+            .sum::<f64>()
+            / 2.0)
+            .abs()
+    };
+    shapes
+        .iter()
+        .map(|s| {
+            s.iter()
+                .enumerate()
+                .map(|(k, c)| if k == 0 { ring(c) } else { -ring(c) })
+                .sum::<f64>()
+        })
+        .sum()
+}
+
+/// The union of the features' plan-view regions.
+pub(crate) fn footprint<'a>(features: impl IntoIterator<Item = &'a MachiningFeature>) -> Shapes {
+    let mut out: Shapes = Vec::new();
+    for g in features {
+        let clip: Shapes = free::region(g).overlay_as::<i64>(
+            &Vec::<Vec<[f64; 2]>>::new(),
+            OverlayRule::Subject,
+            FillRule::EvenOdd,
+        );
+        out = out.overlay_as::<i64>(&clip, OverlayRule::Union, FillRule::NonZero);
+    }
+    out
+}
+
+/// `shapes` less `keep`.
+pub(crate) fn less(shapes: &Shapes, keep: &Shapes) -> Shapes {
+    if keep.is_empty() {
+        return shapes.clone();
+    }
+    free::without_slits(shapes.overlay_as::<i64>(keep, OverlayRule::Difference, FillRule::NonZero))
+}
+
+/// What of `f` lies outside `keep`: each piece a feature of its own (same
+/// id and heights), its edges classified against `free` and `removed`
+/// (which the caller has already cleared of `keep`, so edges along it are
+/// product-like: the tool keeps out), and the area of `f` under `keep`.
+pub(crate) fn uncovered(
+    f: &MachiningFeature,
+    keep: &Shapes,
+    free: &Shapes,
+    removed: &Shapes,
+) -> (Vec<MachiningFeature>, f64) {
+    let own: Shapes = free::region(f).overlay_as::<i64>(
+        &Vec::<Vec<[f64; 2]>>::new(),
+        OverlayRule::Subject,
+        FillRule::EvenOdd,
+    );
+    let rest = less(&own, keep);
+    let covered = (area(&own) - area(&rest)).max(0.0);
+    let pieces = rest
+        .iter()
+        .filter(|s| area(&vec![(*s).clone()]) > 1e-6)
+        .map(|s| crate::rest::rebuilt(f, s, free, removed))
+        .collect();
+    (pieces, covered)
+}
+
+/// The covering features as shank obstacles: their material stands while
+/// the feature below is cut.
+pub(crate) fn obstacles<'a>(
+    plan: &Plan,
+    covering: impl IntoIterator<Item = &'a usize>,
+) -> Vec<Obstacle> {
+    covering
+        .into_iter()
+        .map(|&j| {
+            let g = &plan.machining_features[j];
+            Obstacle {
+                id: g.id,
+                region: free::region(g),
+                top: g.shape.z_max,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use thinplan_plan::*;
+
+    fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<[f64; 2]> {
+        vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]]
+    }
+
+    fn feature(r: Vec<[f64; 2]>) -> MachiningFeature {
+        MachiningFeature {
+            id: MachiningFeatureId(1),
+            owner: StiffnessFeatureId(0),
+            shape: Prism {
+                frame: PrismFrame {
+                    origin: glam::DVec3::ZERO,
+                    x: glam::DVec3::X,
+                    z: glam::DVec3::Z,
+                },
+                region: Region {
+                    outer: ProfileLoop::polygon(&r),
+                    holes: vec![],
+                },
+                z_min: 0.0,
+                z_max: 2.0,
+            },
+            side_adjacency: vec![Adjacency::Open; r.len()],
+            hole_adjacency: vec![],
+            bottom_adjacency: Adjacency::Product,
+            origin: Default::default(),
+            access_blocked: false,
+            slopes: None,
+            provenance: Provenance::new(ProvenanceSource::Default, "test"),
+        }
+    }
+
+    /// A 1 × 1 sliver in the corner of a 10 × 10 web: the web is planned
+    /// on the 99 mm² outside it, the edges along the sliver are product-like
+    /// (the tool keeps out), the ones along the cut space stay open.
+    #[test]
+    fn a_corner_sliver_keeps_one_square_out_of_the_web() {
+        let web = feature(rect(0.0, 0.0, 10.0, 10.0));
+        let sliver = feature(rect(0.0, 0.0, 1.0, 1.0));
+        let keep = footprint([&sliver]);
+        let all: Shapes = vec![vec![rect(-5.0, -5.0, 15.0, 15.0)]];
+        let free = less(&all, &keep);
+        let (pieces, covered) = uncovered(&web, &keep, &free, &free);
+        assert!((covered - 1.0).abs() < 1e-6, "{covered}");
+        assert_eq!(pieces.len(), 1);
+        let p = &pieces[0];
+        let a: f64 = free::region(p)
+            .iter()
+            .map(|c| {
+                let n = c.len();
+                (0..n)
+                    .map(|i| c[i][0] * c[(i + 1) % n][1] - c[(i + 1) % n][0] * c[i][1])
+                    .sum::<f64>()
+                    / 2.0
+            })
+            .sum();
+        assert!((a - 99.0).abs() < 1e-6, "{a}");
+        let product = p
+            .side_adjacency
+            .iter()
+            .filter(|a| **a == Adjacency::Product)
+            .count();
+        assert_eq!(product, 2, "{:?}", p.side_adjacency);
+        assert_eq!(p.side_adjacency.len(), 6);
+    }
+
+    /// A cover across the middle splits the feature into two pieces.
+    #[test]
+    fn a_cover_across_the_middle_leaves_two_pieces() {
+        let web = feature(rect(0.0, 0.0, 10.0, 4.0));
+        let bar = feature(rect(4.0, -1.0, 6.0, 5.0));
+        let keep = footprint([&bar]);
+        let all: Shapes = vec![vec![rect(-5.0, -5.0, 15.0, 15.0)]];
+        let free = less(&all, &keep);
+        let (pieces, covered) = uncovered(&web, &keep, &free, &free);
+        assert_eq!(pieces.len(), 2);
+        assert!((covered - 8.0).abs() < 1e-6, "{covered}");
+    }
+
+    /// A cover over all of it leaves nothing to plan.
+    #[test]
+    fn a_whole_cover_leaves_nothing() {
+        let web = feature(rect(0.0, 0.0, 10.0, 4.0));
+        let lid = feature(rect(-1.0, -1.0, 11.0, 5.0));
+        let keep = footprint([&lid]);
+        let all: Shapes = vec![vec![rect(-5.0, -5.0, 15.0, 15.0)]];
+        let free = less(&all, &keep);
+        let (pieces, covered) = uncovered(&web, &keep, &free, &free);
+        assert!(pieces.is_empty());
+        assert!((covered - 40.0).abs() < 1e-6, "{covered}");
+    }
+}
