@@ -223,9 +223,27 @@ pub struct Space<'a> {
     /// Height of links that leave the tool-centre region.
     pub safe_z: f64,
     pub step: f64,
+    /// Whether a tool centre at a point keeps clear of the product (the
+    /// safety net's own test): the sampled region's chords cut into the
+    /// arcs round product corners by their sagitta, so a link inside the
+    /// samples is also held to it. `None`: the samples alone.
+    pub clear: Option<&'a dyn Fn(DVec3) -> bool>,
 }
 
 impl Space<'_> {
+    /// Whether a straight link from `a` to `b` at height `z` keeps clear
+    /// of the product at the points the safety net samples it.
+    pub fn line_clear(&self, a: DVec2, b: DVec2, z: f64) -> bool {
+        let Some(clear) = self.clear else {
+            return true;
+        };
+        let s = Seg2 { to: b, arc: None };
+        seg_points(a, &s, self.step)
+            .into_iter()
+            .chain([a])
+            .all(|p| clear(p.extend(z)))
+    }
+
     /// Moves the tool to `to` at the cleared height `z_clear` (the top of the
     /// z-level about to be cut): through cleared space inside the
     /// tool-centre region when it can, else over the safe height.
@@ -239,6 +257,7 @@ impl Space<'_> {
         if inside_here
             && b.pos.z <= z_clear + 1e-9
             && segment_inside(here, to, self.centre_region, self.step)
+            && self.line_clear(here, to, z_clear)
         {
             b.line(here.extend(z_clear), Kind::Link);
             b.line(to.extend(z_clear), Kind::Link);
@@ -355,4 +374,46 @@ pub fn helix(
     }
     b.arc(opposite.extend(z_to), centre, ccw, kind);
     b.arc(start.extend(z_to), centre, ccw, kind);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A centre region whose samples round a product corner at (0, 0) by a
+    /// 1 mm chord: a link along the chord is inside the samples but 42 µm
+    /// closer to the corner than the tool's 3 mm radius at its middle. A link along it goes over the top where
+    /// the safety net's test says so, and stays a link where it does not.
+    #[test]
+    fn a_link_inside_the_samples_but_into_a_corner_goes_over_the_top() {
+        let r: f64 = 3.0;
+        let a: f64 = 1.0 / r; // a 1 mm chord on the radius
+        let (p, q) = (
+            DVec2::new(r * (a / 2.0).cos(), -r * (a / 2.0).sin()),
+            DVec2::new(r * (a / 2.0).cos(), r * (a / 2.0).sin()),
+        );
+        let region = vec![vec![
+            DVec2::new(p.x - 0.01, -20.0),
+            DVec2::new(20.0, -20.0),
+            DVec2::new(20.0, 20.0),
+            DVec2::new(q.x - 0.01, 20.0),
+        ]];
+        let corner = DVec2::ZERO;
+        let net = |x: DVec3| x.truncate().distance(corner) >= r - 1e-6;
+        let lenient = |_: DVec3| true;
+        let run = |clear: &dyn Fn(DVec3) -> bool| {
+            let space = Space {
+                centre_region: &region,
+                z_top: 10.0,
+                safe_z: 20.0,
+                step: 0.25,
+                clear: Some(clear),
+            };
+            let mut b = Builder::new(p.extend(0.0));
+            space.transit(&mut b, q, 0.0);
+            b.moves.iter().any(|m| m.kind == Kind::Rapid)
+        };
+        assert!(run(&net), "the link cut the corner");
+        assert!(!run(&lenient), "a clear link went over the top");
+    }
 }

@@ -242,13 +242,14 @@ impl<'b> BandPlan<'b> {
     }
 
     /// Where the band's links may run: its tool-centre region, from the
-    /// top of the stock (rapids) up to the safe height.
-    pub(super) fn space(&self) -> Space<'_> {
+    /// top of the stock (rapids) up to the safe height, where `clear`.
+    pub(super) fn space<'s>(&'s self, clear: &'s dyn Fn(glam::DVec3) -> bool) -> Space<'s> {
         Space {
             centre_region: &self.g.centre_polys,
             z_top: self.h.rapid_floor,
             safe_z: self.h.safe_z,
             step: STEP,
+            clear: Some(clear),
         }
     }
 

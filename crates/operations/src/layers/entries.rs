@@ -147,6 +147,7 @@ pub(super) fn boundary_level(
                 && !rest_polys.is_empty()
                 && inside(here, rest_polys)
                 && segment_inside(here, p.start, rest_polys, STEP)
+                && space.line_clear(here, p.start, b.pos.z)
             {
                 // Through the rest region just cleared at this level.
                 b.line(p.start.extend(b.pos.z), Kind::Link);

@@ -12,7 +12,7 @@ use super::band::BandPlan;
 use super::entries::{boundary_level, enter, go_to, retract};
 use super::parallel::parallel_blocks;
 use super::rest_region::{spiral_rest, LevelPattern};
-use super::safety_net::check;
+use super::safety_net::{check, Net};
 use super::slopes::slope_values;
 use super::{Env, LocalOp};
 use crate::path::{rounded, Builder, Kind};
@@ -137,7 +137,9 @@ pub(super) fn level_op(band: &BandPlan, pattern: &LevelPattern) -> Result<Option
     let h = &band.h;
     let (passes, rest_polys) = (&band.boundary.passes, &band.boundary.rest_polys);
     let rest_plan = &pattern.plan;
-    let space = band.space();
+    let net = Net::new(g);
+    let clear = |p: DVec3| net.touches(p, Kind::Link).is_none();
+    let space = band.space(&clear);
     let full_cut_always = matches!(m.full_cut, FullCut::Always { .. });
     let entry_kind = if full_cut_always {
         Kind::FullCut
@@ -254,7 +256,9 @@ pub(super) fn bottom_layer_op(
     let mk = &band.env.k.methods;
     let h = &band.h;
     let (passes, rest_polys) = (&band.boundary.passes, &band.boundary.rest_polys);
-    let space = band.space();
+    let net = Net::new(g);
+    let clear = |p: DVec3| net.touches(p, Kind::Link).is_none();
+    let space = band.space(&clear);
     let rho_c = m.corner_rounding * d;
     let so = bl.stepover * d;
     let mut b = Builder::new(DVec3::ZERO);

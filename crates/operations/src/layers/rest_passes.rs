@@ -16,7 +16,7 @@ use super::boundary::{boundary_chains, boundary_pass, entered_from_room};
 use super::entries::{go_to, retract};
 use super::plan_view::intersect_polys;
 use super::region::{geometry, Geometry};
-use super::safety_net::check;
+use super::safety_net::{check, Net};
 use super::slopes::{slope_values, Slopes};
 use super::tool_choice::conditions;
 use super::{depth_below_top, tool_reach, Env, LocalOp, STEP};
@@ -182,11 +182,14 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     if passes.is_empty() {
         return Ok(None);
     }
+    let net = Net::new(g2);
+    let clear = |p: DVec3| net.touches(p, Kind::Link).is_none();
     let space = Space {
         centre_region: &room,
         z_top: c.rapid_floor,
         safe_z: c.safe_z,
         step: STEP,
+        clear: Some(&clear),
     };
     let levels: Vec<f64> = match rest {
         Rest::Floor(_) => vec![c.z_min],
