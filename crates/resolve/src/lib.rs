@@ -23,14 +23,15 @@ use glam::DVec3;
 use thinplan_brep::{Brep, Frame};
 use thinplan_knowledge::{FeatureSelector, Knowledge, RemainingOwner, ShallowSlabs, TieBreak};
 use thinplan_plan::{
-    Adjacency, Constraint, ConstraintKind, EdgeSlopes, FeatureOrigin, MachiningFeature,
-    MachiningFeatureId, Plan, Prism, PrismFrame, ProfileLoop, Provenance, ProvenanceSource,
-    Refusal, Region, Stage, StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
+    Adjacency, Constraint, ConstraintKind, FeatureOrigin, MachiningFeature, MachiningFeatureId,
+    Plan, Prism, PrismFrame, ProfileLoop, Provenance, ProvenanceSource, Refusal, Region, Stage,
+    StiffnessFeature, StiffnessFeatureId, StiffnessKind, WallRole,
 };
 
 mod beyond;
 pub mod section;
 mod shank;
+mod slopes;
 use section::{LocalMesh, Shapes};
 pub use shank::RULE_SHANK;
 
@@ -540,11 +541,11 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
             .map(|t| t.corner_radius)
             .fold(0.0, f64::max)
     });
-    let mut sections: SectionCache = BTreeMap::new();
+    let mut sections: slopes::SectionCache = BTreeMap::new();
     for (f, g) in geo.iter().enumerate() {
         if g.bottom_slab == g.top_slab && slabs[g.bottom_slab].sloped {
             let mf = &out.features[f];
-            let slopes = edge_slopes(
+            let slopes = slopes::edge_slopes(
                 &local,
                 g,
                 (slabs[g.top_slab].hi, hi.z),
@@ -557,111 +558,6 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
     }
     Ok(out)
 }
-
-/// How far the product face beyond each product edge of a one-slab feature
-/// lies beyond the edge (its region is the section at the slab's middle),
-/// sampled at the slab's bottom, middle and top and on up by the slab's
-/// thickness until `above` over its top (where a tool's corner radius
-/// reaches) or past the part's `top`. `None` where every face is vertical.
-fn edge_slopes(
-    local: &LocalMesh,
-    g: &Geo,
-    (hi, top): (f64, f64),
-    adjacency: (&[Adjacency], &[Vec<Adjacency>]),
-    (above, reach): (f64, f64),
-    sections: &mut SectionCache,
-) -> Option<EdgeSlopes> {
-    let (lo, at) = (g.lo, 0.5 * (g.lo + hi));
-    let t = hi - lo;
-    let mut heights = vec![lo, at, hi];
-    let mut z = hi;
-    // Above the part's top the sections are empty: nothing stands there.
-    while z < hi + above - 1e-9 && z < top + t && t > 1e-9 {
-        z += t;
-        heights.push(z);
-    }
-    // Just inside: the slab bounds are vertex heights, where a section is
-    // degenerate (the face moves `EPS_SECTION`·slope there: nothing).
-    let probe: Vec<f64> = heights
-        .iter()
-        .enumerate()
-        .map(|(i, &z)| {
-            if i == 0 {
-                z + EPS_SECTION
-            } else {
-                z - EPS_SECTION
-            }
-        })
-        .collect();
-    for (i, z) in probe.iter().enumerate() {
-        if i != 1 {
-            sections.entry(z.to_bits()).or_insert_with(|| {
-                let (loops, _) = local.section(*z);
-                let part = section::fill(&loops);
-                beyond::Section::new(loops, part)
-            });
-        }
-    }
-    let mut any = false;
-    let mut per_loop = |contour: &Vec<[f64; 2]>, adj: &[Adjacency]| -> Vec<Vec<f64>> {
-        let n = contour.len();
-        (0..n)
-            .map(|i| {
-                if adj.get(i) != Some(&Adjacency::Product) {
-                    return Vec::new();
-                }
-                let (a, b) = (contour[i], contour[(i + 1) % n]);
-                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-                let len = (dx * dx + dy * dy).sqrt();
-                if len < 1e-9 {
-                    return Vec::new();
-                }
-                let p = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
-                // Outward (towards the product): right of the edge.
-                let nrm = [dy / len, -dx / len];
-                let e: Vec<f64> = probe
-                    .iter()
-                    .enumerate()
-                    .map(|(k, z)| {
-                        if k == 1 {
-                            return 0.0;
-                        }
-                        let v = beyond::face_beyond(&sections[&z.to_bits()], p, nrm, reach);
-                        // Rounded: the plan file stays readable.
-                        let v = (v * 1e9).round() / 1e9;
-                        if v.abs() < 1e-6 {
-                            0.0
-                        } else {
-                            v
-                        }
-                    })
-                    .collect();
-                if e.iter().all(|v| *v == 0.0) {
-                    return Vec::new();
-                }
-                any = true;
-                e
-            })
-            .collect()
-    };
-    let side = per_loop(&g.region[0][0], adjacency.0);
-    let holes: Vec<Vec<Vec<f64>>> = g.region[0][1..]
-        .iter()
-        .zip(adjacency.1)
-        .map(|(c, a)| per_loop(c, a))
-        .collect();
-    any.then_some(EdgeSlopes {
-        heights,
-        side,
-        holes,
-    })
-}
-
-/// The part's sections by height (bits): the loops and their region.
-type SectionCache = BTreeMap<u64, beyond::Section>;
-
-/// How far inside a slab its bounds' sections are taken (mm).
-const EPS_SECTION: f64 = 1e-4;
 
 /// The plan-view geometry of a resolved feature.
 struct Geo {
