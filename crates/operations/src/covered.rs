@@ -76,9 +76,9 @@ pub(crate) fn uncovered(
     );
     let rest = less(&own, keep);
     let covered = (area(&own) - area(&rest)).max(0.0);
+    // `less` dropped the slivers (`free::without_slits`).
     let pieces = rest
         .iter()
-        .filter(|s| area(&vec![(*s).clone()]) > 1e-6)
         .map(|s| crate::rest::rebuilt(f, s, free, removed))
         .collect();
     (pieces, covered)
