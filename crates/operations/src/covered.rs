@@ -13,9 +13,85 @@
 use i_overlay::core::fill_rule::FillRule;
 use i_overlay::core::overlay_rule::OverlayRule;
 use i_overlay::float::single::SingleFloatOverlay;
+use std::collections::{BTreeMap, BTreeSet};
+
 use thinplan_plan::{MachiningFeature, Plan};
 
 use crate::free::{self, Obstacle, Shapes};
+use crate::layers;
+
+/// For each feature, the features above it that get no operation.
+pub(crate) struct Covering {
+    /// Per feature: the features without operations that cover it from
+    /// the tool side, directly or through others.
+    pub(crate) by: Vec<BTreeSet<usize>>,
+    /// Per feature: why, as the first of them gave it (the reason, and
+    /// whether its material is unreachable in this set-up).
+    pub(crate) reason: Vec<Option<(String, bool)>>,
+}
+
+impl Covering {
+    pub(crate) fn new(n: usize) -> Self {
+        Covering {
+            by: vec![BTreeSet::new(); n],
+            reason: vec![None; n],
+        }
+    }
+
+    /// One pass down the accessibility constraints: a feature is covered by
+    /// what covers the feature above it, and by that feature too where it
+    /// gets no operation (`skipped`, or an error in `made`). A feature whose
+    /// covering grows is reset in `made`, to be planned again. Whether any
+    /// grew.
+    pub(crate) fn spread(
+        &mut self,
+        plan: &Plan,
+        skipped: &BTreeMap<usize, (String, bool)>,
+        made: &mut [Option<Result<layers::Made, String>>],
+    ) -> bool {
+        let mut changed = false;
+        for c in &plan.machining_constraints {
+            if c.provenance.rule != "interference.accessibility" {
+                continue;
+            }
+            let (a, b) = (c.first.0 as usize, c.second.0 as usize);
+            if skipped.contains_key(&b) {
+                continue;
+            }
+            let a_fails = skipped.contains_key(&a) || matches!(made[a], Some(Err(_)));
+            let mut add = self.by[a].clone();
+            if a_fails {
+                add.insert(a);
+            }
+            if add.is_subset(&self.by[b]) {
+                continue;
+            }
+            if self.reason[b].is_none() {
+                // Below material no tool reaches, the same holds.
+                let unreachable = match (&skipped.get(&a), &made[a]) {
+                    (Some((_, u)), _) => *u,
+                    (None, Some(Err(e))) => layers::is_unreachable(e),
+                    _ => self.reason[a].as_ref().is_some_and(|r| r.1),
+                };
+                let first = if a_fails {
+                    c.first
+                } else {
+                    plan.machining_features[*self.by[a].iter().next().expect("not a subset")].id
+                };
+                let reason = if unreachable {
+                    format!("unreachable: {first} above it is")
+                } else {
+                    format!("{first} above it gets no operation")
+                };
+                self.reason[b] = Some((reason, unreachable));
+            }
+            self.by[b].extend(add);
+            made[b] = None;
+            changed = true;
+        }
+        changed
+    }
+}
 
 fn area(shapes: &Shapes) -> f64 {
     let ring = |c: &Vec<[f64; 2]>| {

@@ -223,11 +223,7 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
         .collect();
     let mut made: Vec<Option<Result<layers::Made, String>>> =
         (0..plan.machining_features.len()).map(|_| None).collect();
-    // Features that get no operation and cover each feature from the tool
-    // side (directly or through others), with the reason the first gave.
-    let n = plan.machining_features.len();
-    let mut covering: Vec<std::collections::BTreeSet<usize>> = vec![Default::default(); n];
-    let mut cover_reason: Vec<Option<(String, bool)>> = vec![None; n];
+    let mut covering = covered::Covering::new(plan.machining_features.len());
     loop {
         for (i, f) in plan.machining_features.iter().enumerate() {
             if made[i].is_some() || skipped.contains_key(&i) {
@@ -235,8 +231,8 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
             }
             let free = free::free_space(plan, i, 2.0 * d_max);
             let removed = free::removed_space(plan, i, 2.0 * d_max, &positions);
-            let mut obstacles = free::shank_obstacles(plan, i, d_max, min_flute, &shank_edges);
-            if covering[i].is_empty() {
+            let obstacles = free::shank_obstacles(plan, i, d_max, min_flute, &shank_edges);
+            if covering.by[i].is_empty() {
                 made[i] = Some(feature_made(
                     f,
                     &env,
@@ -247,98 +243,26 @@ fn first_pass(plan: &Plan, k: &Knowledge) -> Result<Operations, OperationsError>
                 ));
                 continue;
             }
-            let reason = cover_reason[i].clone().unwrap_or_default();
-            let (Some(free), Some(removed)) = (free, removed) else {
-                skipped.insert(i, reason);
-                continue;
-            };
-            let keep = covered::footprint(covering[i].iter().map(|&j| &plan.machining_features[j]));
-            let (free, removed) = (covered::less(&free, &keep), covered::less(&removed, &keep));
-            let (pieces, under) = covered::uncovered(f, &keep, &free, &removed);
-            if pieces.is_empty() {
-                skipped.insert(i, reason);
-                continue;
-            }
-            obstacles.extend(covered::obstacles(plan, &covering[i]));
-            let mut whole = layers::Made::default();
-            let mut m = Ok(());
-            for piece in &pieces {
-                match feature_made(
-                    piece,
-                    &env,
-                    Some(&free),
-                    Some(&removed),
-                    &obstacles,
-                    rest_reach,
-                ) {
-                    Ok(p) => whole.absorb(p),
-                    Err(e) => {
-                        m = Err(e);
-                        break;
-                    }
+            let reason = covering.reason[i].clone().unwrap_or_default();
+            let spaces = free.zip(removed);
+            match spaces.and_then(|s| {
+                covered_made(
+                    plan,
+                    i,
+                    &covering,
+                    s,
+                    obstacles,
+                    &reason.0,
+                    |piece, s, o| feature_made(piece, &env, Some(&s.0), Some(&s.1), o, rest_reach),
+                )
+            }) {
+                Some(m) => made[i] = Some(m),
+                None => {
+                    skipped.insert(i, reason);
                 }
             }
-            made[i] = Some(m.map(|()| {
-                let depth = (f.shape.z_max - f.shape.z_min).max(0.0);
-                whole.unreachable.insert(
-                    0,
-                    (
-                        format!("{}: {under:.1} mm² of it left: {}", f.id, reason.0),
-                        under * depth,
-                    ),
-                );
-                whole.warnings.insert(
-                    0,
-                    format!(
-                        "{}: planned on the {} piece(s) outside the features above it that \
-                         get no operation ({under:.1} mm² left)",
-                        f.id,
-                        pieces.len()
-                    ),
-                );
-                whole
-            }));
         }
-        let mut changed = false;
-        for c in &plan.machining_constraints {
-            if c.provenance.rule != "interference.accessibility" {
-                continue;
-            }
-            let (a, b) = (c.first.0 as usize, c.second.0 as usize);
-            if skipped.contains_key(&b) {
-                continue;
-            }
-            let a_fails = skipped.contains_key(&a) || matches!(made[a], Some(Err(_)));
-            let mut add = covering[a].clone();
-            if a_fails {
-                add.insert(a);
-            }
-            if add.is_subset(&covering[b]) {
-                continue;
-            }
-            if cover_reason[b].is_none() {
-                // Below material no tool reaches, the same holds.
-                let unreachable = match (&skipped.get(&a), &made[a]) {
-                    (Some((_, u)), _) => *u,
-                    (None, Some(Err(e))) => layers::is_unreachable(e),
-                    _ => cover_reason[a].as_ref().is_some_and(|r| r.1),
-                };
-                let first = if a_fails {
-                    c.first
-                } else {
-                    plan.machining_features[*covering[a].iter().next().expect("not a subset")].id
-                };
-                let reason = if unreachable {
-                    format!("unreachable: {first} above it is")
-                } else {
-                    format!("{first} above it gets no operation")
-                };
-                cover_reason[b] = Some((reason, unreachable));
-            }
-            covering[b].extend(add);
-            made[b] = None;
-            changed = true;
-        }
+        let changed = covering.spread(plan, &skipped, &mut made);
         if !changed {
             break;
         }
@@ -731,6 +655,58 @@ pub(crate) fn to_part(f: &thinplan_plan::MachiningFeature, c: DVec2, z: f64) -> 
 }
 
 /// A whole feature's volume (mm³): its region over its depth.
+/// `plan.machining_features[i]`'s operations on the pieces of it outside
+/// the features above it that get no operation (`covering`), with the
+/// material under them reported as unreachable (`reason`, why they get
+/// none); `None` where nothing of it lies outside them.
+fn covered_made(
+    plan: &Plan,
+    i: usize,
+    covering: &covered::Covering,
+    (free, removed): (free::Shapes, free::Shapes),
+    mut obstacles: Vec<free::Obstacle>,
+    reason: &str,
+    make: impl Fn(
+        &thinplan_plan::MachiningFeature,
+        &(free::Shapes, free::Shapes),
+        &[free::Obstacle],
+    ) -> Result<layers::Made, String>,
+) -> Option<Result<layers::Made, String>> {
+    let f = &plan.machining_features[i];
+    let keep = covered::footprint(covering.by[i].iter().map(|&j| &plan.machining_features[j]));
+    let spaces = (covered::less(&free, &keep), covered::less(&removed, &keep));
+    let (pieces, under) = covered::uncovered(f, &keep, &spaces.0, &spaces.1);
+    if pieces.is_empty() {
+        return None;
+    }
+    obstacles.extend(covered::obstacles(plan, &covering.by[i]));
+    let mut whole = layers::Made::default();
+    for piece in &pieces {
+        match make(piece, &spaces, &obstacles) {
+            Ok(p) => whole.absorb(p),
+            Err(e) => return Some(Err(e)),
+        }
+    }
+    let depth = (f.shape.z_max - f.shape.z_min).max(0.0);
+    whole.unreachable.insert(
+        0,
+        (
+            format!("{}: {under:.1} mm² of it left: {reason}", f.id),
+            under * depth,
+        ),
+    );
+    whole.warnings.insert(
+        0,
+        format!(
+            "{}: planned on the {} piece(s) outside the features above it that get no \
+             operation ({under:.1} mm² left)",
+            f.id,
+            pieces.len()
+        ),
+    );
+    Some(Ok(whole))
+}
+
 /// A feature's operations: its own region first; where no tool fits it
 /// alone, reached from the space cut beside it; where the safety net
 /// refused the paths, with smaller tools.
