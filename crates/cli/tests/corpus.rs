@@ -95,6 +95,9 @@ fn corpus(py: &Path) -> PathBuf {
         return d;
     }
     let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("corpus");
+    // Tests run in parallel: one of them generates, the others wait.
+    static GENERATING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one = GENERATING.lock().unwrap_or_else(|e| e.into_inner());
     if !d.join("index.json").is_file() {
         sh(
             Command::new(py)
@@ -254,6 +257,43 @@ fn judge(planned: &[Planned], checked: &serde_json::Map<String, Value>) -> Vec<S
         }
     }
     failures
+}
+
+/// One corpus part planned into a fresh directory, with what the checker
+/// needs.
+struct One {
+    py: PathBuf,
+    corpus: PathBuf,
+    out: PathBuf,
+    p: Planned,
+}
+
+/// Plans corpus part `name` into the fresh directory `dir`; it must write a
+/// program.
+fn plan_one(dir: &str, name: &str) -> One {
+    let py = python();
+    let corpus = corpus(&py);
+    let out = fresh(dir);
+    let step = corpus.join(format!("{name}.step"));
+    let p = plan(step.to_str().unwrap(), name, &out);
+    assert!(p.program, "{name}: no program, exit {}", p.code);
+    One { py, corpus, out, p }
+}
+
+impl One {
+    /// The plan file the run saved.
+    fn saved(&self) -> Value {
+        let path = self.out.join(format!("{}.plan.json", self.p.name));
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+    }
+
+    /// The checker's figures on the program, which `judge` must pass.
+    fn checked_safe(&self) -> serde_json::Map<String, Value> {
+        let checked = check(&self.py, &self.out, &self.corpus, &default_tool_lib());
+        let failures = judge(std::slice::from_ref(&self.p), &checked);
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+        checked
+    }
 }
 
 /// The checker finds at most 1 mm³ missed on `name`.
@@ -505,17 +545,9 @@ fn a_d20_alone_leaves_the_pocket_corners_and_names_the_tool_they_need() {
 /// and the checker finds at most 1 mm³ missed.
 #[test]
 fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
-    let py = python();
-    let corpus = corpus(&py);
-    let out = fresh("corpus-fillet-slab");
-    let name = "pocket_frame_09";
-    let step = corpus.join(format!("{name}.step"));
-    let p = plan(step.to_str().unwrap(), name, &out);
-    assert!(p.program, "{name}: no program, exit {}", p.code);
-    let saved: Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join(format!("{name}.plan.json"))).unwrap(),
-    )
-    .unwrap();
+    let one = plan_one("corpus-fillet-slab", "pocket_frame_09");
+    let name = one.p.name.as_str();
+    let saved = one.saved();
     let refused: Vec<&str> = saved["refusals"]
         .as_array()
         .unwrap()
@@ -532,10 +564,7 @@ fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
         .filter(|r| r.contains("no tool") || r.contains("above it is"))
         .collect();
     assert!(no_tool.is_empty(), "{name}: {no_tool:#?}");
-    let lib = default_tool_lib();
-    let checked = check(&py, &out, &corpus, &lib);
-    let failures = judge(std::slice::from_ref(&p), &checked);
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let checked = one.checked_safe();
     assert_checker_missed_at_most_1(&checked, name);
 }
 
@@ -550,19 +579,11 @@ fn a_floor_slab_through_fillets_is_planned_not_refused_with_the_slabs_below() {
 /// problem of stage 9's, and none by the checker.
 #[test]
 fn ribs_crossing_in_filleted_corners_are_finished_by_smaller_tools_in_turn() {
-    let py = python();
-    let corpus = corpus(&py);
-    let out = fresh("corpus-rib-crossings");
-    let name = "egg_crate_03";
-    let step = corpus.join(format!("{name}.step"));
-    let p = plan(step.to_str().unwrap(), name, &out);
-    assert!(p.program, "{name}: no program, exit {}", p.code);
+    let one = plan_one("corpus-rib-crossings", "egg_crate_03");
+    let (name, p) = (one.p.name.as_str(), &one.p);
     let problems = p.report["verification"]["problems"].as_array().unwrap();
     assert!(problems.is_empty(), "{name}: {problems:#?}");
-    let lib = default_tool_lib();
-    let checked = check(&py, &out, &corpus, &lib);
-    let failures = judge(&[p], &checked);
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    one.checked_safe();
 }
 
 /// A wing rib whose flange-side levels plunge 4 mm at a corner: the first
@@ -573,13 +594,8 @@ fn ribs_crossing_in_filleted_corners_are_finished_by_smaller_tools_in_turn() {
 /// and the checker finds no missed material.
 #[test]
 fn a_rapid_that_meets_stock_sends_the_links_over_the_top_not_the_operation_away() {
-    let py = python();
-    let corpus = corpus(&py);
-    let out = fresh("corpus-links-over-top");
-    let name = "wing_rib_09";
-    let step = corpus.join(format!("{name}.step"));
-    let p = plan(step.to_str().unwrap(), name, &out);
-    assert!(p.program, "{name}: no program, exit {}", p.code);
+    let one = plan_one("corpus-links-over-top", "wing_rib_09");
+    let (name, p) = (one.p.name.as_str(), &one.p);
     let v = &p.report["verification"];
     let how = |h: &str| {
         v["replanned"]
@@ -595,10 +611,7 @@ fn a_rapid_that_meets_stock_sends_the_links_over_the_top_not_the_operation_away(
     );
     let removed = v["removed"].as_array().unwrap();
     assert!(removed.is_empty(), "{name}: {removed:#?}");
-    let lib = default_tool_lib();
-    let checked = check(&py, &out, &corpus, &lib);
-    let failures = judge(std::slice::from_ref(&p), &checked);
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let checked = one.checked_safe();
     assert_checker_missed_at_most_1(&checked, name);
 }
 
@@ -612,13 +625,8 @@ fn a_rapid_that_meets_stock_sends_the_links_over_the_top_not_the_operation_away(
 /// and the checker finds nothing against it.
 #[test]
 fn an_edge_on_a_vertical_face_reads_that_face_at_every_height() {
-    let py = python();
-    let corpus = corpus(&py);
-    let out = fresh("corpus-face-at-every-height");
-    let name = "pocket_frame_05";
-    let step = corpus.join(format!("{name}.step"));
-    let p = plan(step.to_str().unwrap(), name, &out);
-    assert!(p.program, "{name}: no program, exit {}", p.code);
+    let one = plan_one("corpus-face-at-every-height", "pocket_frame_05");
+    let (name, p) = (one.p.name.as_str(), &one.p);
     let gouges = p.report["verification"]["removed"]
         .as_array()
         .unwrap()
@@ -626,10 +634,7 @@ fn an_edge_on_a_vertical_face_reads_that_face_at_every_height() {
         .filter(|r| r["problem"]["kind"] == "gouge")
         .count();
     assert_eq!(gouges, 0, "{name}: operations removed for gouges");
-    let lib = default_tool_lib();
-    let checked = check(&py, &out, &corpus, &lib);
-    let failures = judge(std::slice::from_ref(&p), &checked);
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let checked = one.checked_safe();
     assert_checker_missed_at_most_1(&checked, name);
 }
 
@@ -642,17 +647,9 @@ fn an_edge_on_a_vertical_face_reads_that_face_at_every_height() {
 /// footprint, and only the material under the footprint is left.
 #[test]
 fn a_sliver_no_tool_fits_leaves_its_footprint_not_the_layers_below() {
-    let py = python();
-    let corpus = corpus(&py);
-    let out = fresh("corpus-sliver-footprint");
-    let name = "pocket_frame_04";
-    let step = corpus.join(format!("{name}.step"));
-    let p = plan(step.to_str().unwrap(), name, &out);
-    assert!(p.program, "{name}: no program, exit {}", p.code);
-    let saved: Value = serde_json::from_str(
-        &std::fs::read_to_string(out.join(format!("{name}.plan.json"))).unwrap(),
-    )
-    .unwrap();
+    let one = plan_one("corpus-sliver-footprint", "pocket_frame_04");
+    let name = one.p.name.as_str();
+    let saved = one.saved();
     let (mut covered, mut slivers) = (0.0, 0);
     for r in saved["refusals"].as_array().unwrap() {
         let reason = r["reason"].as_str().unwrap_or_default();
@@ -670,10 +667,7 @@ fn a_sliver_no_tool_fits_leaves_its_footprint_not_the_layers_below() {
         covered < 50.0,
         "{name}: {covered:.1} mm³ left under features without operations"
     );
-    let lib = default_tool_lib();
-    let checked = check(&py, &out, &corpus, &lib);
-    let failures = judge(std::slice::from_ref(&p), &checked);
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let checked = one.checked_safe();
     let missed = checked[name]["missed"]["volume"].as_f64().unwrap();
     assert!(
         missed < 50.0,

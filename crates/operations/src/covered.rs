@@ -94,34 +94,14 @@ impl Covering {
 }
 
 fn area(shapes: &Shapes) -> f64 {
-    let ring = |c: &Vec<[f64; 2]>| {
-        let n = c.len();
-        ((0..n)
-            .map(|i| c[i][0] * c[(i + 1) % n][1] - c[(i + 1) % n][0] * c[i][1])
-            .sum::<f64>()
-            / 2.0)
-            .abs()
-    };
-    shapes
-        .iter()
-        .map(|s| {
-            s.iter()
-                .enumerate()
-                .map(|(k, c)| if k == 0 { ring(c) } else { -ring(c) })
-                .sum::<f64>()
-        })
-        .sum()
+    shapes.iter().map(|s| free::shape_area(s)).sum()
 }
 
 /// The union of the features' plan-view regions.
 pub(crate) fn footprint<'a>(features: impl IntoIterator<Item = &'a MachiningFeature>) -> Shapes {
     let mut out: Shapes = Vec::new();
     for g in features {
-        let clip: Shapes = free::region(g).overlay_as::<i64>(
-            &Vec::<Vec<[f64; 2]>>::new(),
-            OverlayRule::Subject,
-            FillRule::EvenOdd,
-        );
+        let clip = free::filled(&free::region(g));
         out = out.overlay_as::<i64>(&clip, OverlayRule::Union, FillRule::NonZero);
     }
     out
@@ -145,11 +125,7 @@ pub(crate) fn uncovered(
     free: &Shapes,
     removed: &Shapes,
 ) -> (Vec<MachiningFeature>, f64) {
-    let own: Shapes = free::region(f).overlay_as::<i64>(
-        &Vec::<Vec<[f64; 2]>>::new(),
-        OverlayRule::Subject,
-        FillRule::EvenOdd,
-    );
+    let own = free::filled(&free::region(f));
     let rest = less(&own, keep);
     let covered = (area(&own) - area(&rest)).max(0.0);
     // `less` dropped the slivers (`free::without_slits`).
@@ -189,30 +165,8 @@ mod tests {
     }
 
     fn feature(r: Vec<[f64; 2]>) -> MachiningFeature {
-        MachiningFeature {
-            id: MachiningFeatureId(1),
-            owner: StiffnessFeatureId(0),
-            shape: Prism {
-                frame: PrismFrame {
-                    origin: glam::DVec3::ZERO,
-                    x: glam::DVec3::X,
-                    z: glam::DVec3::Z,
-                },
-                region: Region {
-                    outer: ProfileLoop::polygon(&r),
-                    holes: vec![],
-                },
-                z_min: 0.0,
-                z_max: 2.0,
-            },
-            side_adjacency: vec![Adjacency::Open; r.len()],
-            hole_adjacency: vec![],
-            bottom_adjacency: Adjacency::Product,
-            origin: Default::default(),
-            access_blocked: false,
-            slopes: None,
-            provenance: Provenance::new(ProvenanceSource::Default, "test"),
-        }
+        let open = vec![Adjacency::Open; r.len()];
+        crate::rest::test_feature(1, &r, open, (0.0, 2.0))
     }
 
     /// A 1 × 1 sliver in the corner of a 10 × 10 web: the web is planned
@@ -229,16 +183,7 @@ mod tests {
         assert!((covered - 1.0).abs() < 1e-6, "{covered}");
         assert_eq!(pieces.len(), 1);
         let p = &pieces[0];
-        let a: f64 = free::region(p)
-            .iter()
-            .map(|c| {
-                let n = c.len();
-                (0..n)
-                    .map(|i| c[i][0] * c[(i + 1) % n][1] - c[(i + 1) % n][0] * c[i][1])
-                    .sum::<f64>()
-                    / 2.0
-            })
-            .sum();
+        let a = crate::layers::region_area(p);
         assert!((a - 99.0).abs() < 1e-6, "{a}");
         let product = p
             .side_adjacency

@@ -39,6 +39,33 @@ pub(crate) fn region(f: &MachiningFeature) -> Vec<Vec<[f64; 2]>> {
     c
 }
 
+/// Contours (outer loops and holes, any orientation) as shapes, holes
+/// where loops nest (even-odd).
+pub(crate) fn filled(contours: &[Vec<[f64; 2]>]) -> Shapes {
+    contours.overlay_as::<i64>(
+        &Vec::<Vec<[f64; 2]>>::new(),
+        OverlayRule::Subject,
+        FillRule::EvenOdd,
+    )
+}
+
+/// The area of one shape (an outer contour then holes), mm².
+pub(crate) fn shape_area(shape: &[Vec<[f64; 2]>]) -> f64 {
+    let ring = |c: &Vec<[f64; 2]>| {
+        let n = c.len();
+        ((0..n)
+            .map(|i| c[i][0] * c[(i + 1) % n][1] - c[(i + 1) % n][0] * c[i][1])
+            .sum::<f64>()
+            / 2.0)
+            .abs()
+    };
+    shape
+        .iter()
+        .enumerate()
+        .map(|(k, c)| if k == 0 { ring(c) } else { -ring(c) })
+        .sum()
+}
+
 /// The free space around `plan.machining_features[i]` within `margin` of it:
 /// points that are no product at any height of the feature (inside another
 /// feature or the feature itself at every height, or outside the blank).
@@ -255,11 +282,7 @@ pub(crate) fn shank_obstacles(
 pub(crate) fn without(free: &Shapes, obstacles: &[&Obstacle]) -> Shapes {
     let mut out = free.clone();
     for o in obstacles {
-        let clip: Shapes = o.region.overlay_as::<i64>(
-            &Vec::<Vec<[f64; 2]>>::new(),
-            OverlayRule::Subject,
-            FillRule::EvenOdd,
-        );
+        let clip = filled(&o.region);
         out = out.overlay_as::<i64>(&clip, OverlayRule::Difference, FillRule::NonZero);
     }
     without_slits(out)

@@ -85,14 +85,7 @@ pub(crate) fn reached_from_beside(
                 own.overlay_as::<i64>(s, OverlayRule::Intersect, FillRule::NonZero);
             common
                 .iter()
-                .flat_map(|c| c.iter().enumerate())
-                .map(|(k, c)| {
-                    if k == 0 {
-                        signed_area(c).abs()
-                    } else {
-                        -signed_area(c).abs()
-                    }
-                })
+                .map(|c| crate::free::shape_area(c))
                 .sum::<f64>()
                 > 1e-3 * own_area
         })
@@ -100,17 +93,7 @@ pub(crate) fn reached_from_beside(
     let [shape] = grown.as_slice() else {
         return None;
     };
-    let total: f64 = shape
-        .iter()
-        .enumerate()
-        .map(|(k, c)| {
-            if k == 0 {
-                signed_area(c).abs()
-            } else {
-                -signed_area(c).abs()
-            }
-        })
-        .sum();
+    let total = crate::free::shape_area(shape);
     if total <= own_area * (1.0 + 1e-6) {
         return None;
     }
@@ -230,6 +213,41 @@ fn carried_slopes(f: &MachiningFeature, g: &MachiningFeature) -> Option<thinplan
     })
 }
 
+/// A straight-edged feature in the plan frame, `z` its heights (tests).
+#[cfg(test)]
+pub(crate) fn test_feature(
+    id: u32,
+    outer: &[[f64; 2]],
+    side_adjacency: Vec<Adjacency>,
+    (z_min, z_max): (f64, f64),
+) -> MachiningFeature {
+    use thinplan_plan::*;
+    MachiningFeature {
+        id: MachiningFeatureId(id),
+        owner: StiffnessFeatureId(0),
+        shape: Prism {
+            frame: PrismFrame {
+                origin: glam::DVec3::ZERO,
+                x: glam::DVec3::X,
+                z: glam::DVec3::Z,
+            },
+            region: Region {
+                outer: ProfileLoop::polygon(outer),
+                holes: vec![],
+            },
+            z_min,
+            z_max,
+        },
+        side_adjacency,
+        hole_adjacency: vec![],
+        bottom_adjacency: Adjacency::Product,
+        slopes: None,
+        origin: Default::default(),
+        access_blocked: false,
+        provenance: Provenance::new(ProvenanceSource::Default, "test"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -244,38 +262,17 @@ mod tests {
     /// along both walls (x 0–30 × y 0–10 and x 0–10 × y 0–30). Beyond
     /// y = 30 and x = 30 stands a feature still to come.
     fn corner() -> (MachiningFeature, Shapes, Shapes) {
-        let v = |x: f64, y: f64| ProfileVertex { x, y, bulge: 0.0 };
-        let f = MachiningFeature {
-            id: MachiningFeatureId(7),
-            owner: StiffnessFeatureId(0),
-            shape: Prism {
-                frame: PrismFrame {
-                    origin: glam::DVec3::ZERO,
-                    x: glam::DVec3::X,
-                    z: glam::DVec3::Z,
-                },
-                region: Region {
-                    outer: ProfileLoop {
-                        vertices: vec![v(0.0, 0.0), v(4.0, 0.0), v(4.0, 4.0), v(0.0, 4.0)],
-                    },
-                    holes: vec![],
-                },
-                z_min: 0.0,
-                z_max: 10.0,
-            },
-            side_adjacency: vec![
+        let f = test_feature(
+            7,
+            &rect(0.0, 0.0, 4.0, 4.0),
+            vec![
                 Adjacency::Product,
                 Adjacency::Open,
                 Adjacency::Open,
                 Adjacency::Product,
             ],
-            hole_adjacency: vec![],
-            bottom_adjacency: Adjacency::Product,
-            slopes: None,
-            origin: Default::default(),
-            access_blocked: false,
-            provenance: Provenance::new(ProvenanceSource::Default, "test"),
-        };
+            (0.0, 10.0),
+        );
         let free = vec![vec![rect(0.0, 0.0, 60.0, 60.0)]];
         let removed: Shapes = vec![rect(0.0, 0.0, 30.0, 10.0), rect(0.0, 0.0, 10.0, 30.0)]
             .overlay_as::<i64>(
