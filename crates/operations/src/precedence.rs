@@ -36,7 +36,11 @@ pub fn shank_edges(
     margin: f64,
     rise: f64,
 ) -> Vec<(MachiningFeatureId, MachiningFeatureId)> {
-    forward_edges(plan, |fi, fj| fi.shank_neighbour(fj, margin, rise))
+    edges(
+        plan,
+        |fi, fj| fi.shank_neighbour(fj, margin, rise),
+        |_, _| false,
+    )
 }
 
 /// Stage 8's extra `Before` edges: the shank edges, and an edge from every
@@ -53,19 +57,24 @@ pub fn stage8_edges(
         return Vec::new();
     };
     let cuts = cutting_pairs(plan, tools);
-    forward_edges(plan, |fi, fj| {
-        fi.shank_neighbour(fj, margin, rise) || cuts.contains(&(fi.id, fj.id))
-    })
+    edges(
+        plan,
+        |fi, fj| fi.shank_neighbour(fj, margin, rise) || cuts.contains(&(fi.id, fj.id)),
+        |fi, fj| cuts.contains(&(fi.id, fj.id)),
+    )
 }
 
 /// `Before` edges (j, i) for every pair where `j` comes earlier than `i` in
-/// the machining order and `wanted(i, j)` holds, except where the edge would
-/// close a cycle between stage 8's groups (features joined by
-/// `Simultaneous` constraints run as one block). Pairs are visited in
-/// machining order, so the result is deterministic.
-fn forward_edges(
+/// the machining order and `wanted(i, j)` holds, then for every pair where
+/// `j` comes later and `later(i, j)` holds (an operation of `i` reaches
+/// into a neighbour stage 6 took as standing: it must be gone first), except
+/// where the edge would close a cycle between stage 8's groups (features
+/// joined by `Simultaneous` constraints run as one block). Pairs are
+/// visited in machining order, so the result is deterministic.
+fn edges(
     plan: &Plan,
     mut wanted: impl FnMut(&MachiningFeature, &MachiningFeature) -> bool,
+    mut later: impl FnMut(&MachiningFeature, &MachiningFeature) -> bool,
 ) -> Vec<(MachiningFeatureId, MachiningFeatureId)> {
     let n = plan.machining_features.len();
     let order = machining_order(plan);
@@ -138,6 +147,23 @@ fn forward_edges(
             out.push((fj.id, fi.id));
         }
     }
+    for f in &order {
+        let i = f.0 as usize;
+        let fi = &plan.machining_features[i];
+        for j in order
+            .iter()
+            .map(|g| g.0 as usize)
+            .filter(|&j| pos[j] > pos[i])
+        {
+            let fj = &plan.machining_features[j];
+            let (gi, gj) = (group[i], group[j]);
+            if gi == gj || !later(fi, fj) || reaches(&succ, gi, gj) {
+                continue;
+            }
+            succ.entry(gj).or_default().insert(gi);
+            out.push((fj.id, fi.id));
+        }
+    }
     out.sort();
     out.dedup();
     out
@@ -150,10 +176,12 @@ const CUT_INTO: f64 = 0.05;
 /// Pairs (i, j), by feature id, where an operation of feature `i` (its
 /// cutting moves; floor rest passes excepted, stage 8 runs them last) takes
 /// more than `CUT_INTO` of feature `j`'s material: the tool's disc at some
-/// point of a cutting move reaches that far into `j`'s region, with the
-/// flutes within `j`'s depth. Stage 7 lets a tool overhang an edge to a
-/// feature earlier in the machining order by up to a whole diameter (stage
-/// 6 calls it open), so `j` must be gone when such an operation runs.
+/// point of a cutting move reaches that far into `j`'s region below `j`'s
+/// top, where the flutes cut it or, above them, the shank rubs it. Stage 7
+/// lets a tool overhang an edge to a feature earlier in the machining order
+/// by up to a whole diameter (stage 6 calls it open), and a rest pass may
+/// reach past an edge to a feature stage 6 took as standing, so `j` must be
+/// gone when such an operation runs.
 pub fn cutting_pairs(
     plan: &Plan,
     tools: &thinplan_knowledge::ToolSet,
@@ -179,7 +207,7 @@ pub fn cutting_pairs(
         let Some(tool) = tools.tools.iter().find(|t| t.id == op.tool) else {
             continue;
         };
-        let (r, flute) = (tool.diameter / 2.0 - CUT_INTO, tool.flute_length);
+        let r = tool.diameter / 2.0 - CUT_INTO;
         let fi = &feats[i];
         let fr = &fi.shape.frame;
         let y = fr.z.cross(fr.x);
@@ -258,9 +286,9 @@ pub fn cutting_pairs(
             {
                 continue;
             }
-            let (zlo, zhi) = (fj.shape.z_min + CUT_INTO, fj.shape.z_max - CUT_INTO);
+            let zhi = fj.shape.z_max - CUT_INTO;
             let hit = segs.iter().any(|(a, b)| {
-                if a.z.min(b.z) >= zhi || a.z.max(b.z) + flute <= zlo {
+                if a.z.min(b.z) >= zhi {
                     return false;
                 }
                 let (p, q) = (a.truncate(), b.truncate());
