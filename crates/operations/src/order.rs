@@ -36,19 +36,34 @@ pub fn order(plan: &Plan, k: &Knowledge) -> Result<Vec<OperationId>, OrderError>
     let reach = set.map_or(0.0, |set| {
         set.tools.iter().map(|t| t.diameter).fold(0.0, f64::max)
     });
-    let flutes: BTreeMap<String, f64> = set
+    let sizes: BTreeMap<String, Size> = set
         .map(|set| {
             set.tools
                 .iter()
-                .map(|t| (t.id.clone(), t.flute_length))
+                .map(|t| {
+                    let size = Size {
+                        flute_length: t.flute_length,
+                        diameter: t.diameter,
+                    };
+                    (t.id.clone(), size)
+                })
                 .collect()
         })
         .unwrap_or_default();
     order_with_edges(
         plan,
         &crate::precedence::stage8_edges(plan, k),
-        (reach, &flutes),
+        (reach, &sizes),
     )
+}
+
+/// What stage 8 reads of a tool: how high its flutes reach (a rest pass
+/// before what is cut below it) and its diameter (rest passes, larger
+/// tools first).
+#[derive(Debug, Clone, Copy)]
+struct Size {
+    flute_length: f64,
+    diameter: f64,
 }
 
 /// Fills `plan.operation_order` and records stage 8.
@@ -81,12 +96,13 @@ pub fn order_unchecked(plan: &Plan) -> Result<Vec<OperationId>, OrderError> {
 
 /// Stage 8 with extra `Before` edges between features; `reach`: how far
 /// apart in plan a feature below a rest pass's may lie and still come first,
-/// and the tools' flute lengths by id (`rest_before_below`; a tool not
-/// listed has none).
+/// and the tools' sizes by id (flute lengths for `rest_before_below`, a
+/// tool not listed has none; diameters to run rest passes larger tools
+/// first).
 fn order_with_edges(
     plan: &Plan,
     extra: &[(MachiningFeatureId, MachiningFeatureId)],
-    (reach, flutes): (f64, &BTreeMap<String, f64>),
+    (reach, sizes): (f64, &BTreeMap<String, Size>),
 ) -> Result<Vec<OperationId>, OrderError> {
     // Features that have operations, and their operations in stage-7 order.
     let mut ops_of: BTreeMap<MachiningFeatureId, Vec<usize>> = BTreeMap::new();
@@ -139,6 +155,7 @@ fn order_with_edges(
     // A group's operations: its features' operations, interleaved by
     // feature order (simultaneous features are machined together).
     let is_rest_pass = |i: usize| crate::runs_last(&plan.operations[i]);
+    let diameter = |o: &thinplan_plan::Operation| sizes.get(&o.tool).map_or(0.0, |s| s.diameter);
     let members = |g: MachiningFeatureId| -> Vec<usize> {
         let mut v = Vec::new();
         for (f, ops) in &ops_of {
@@ -146,9 +163,16 @@ fn order_with_edges(
                 v.extend(ops.iter().copied());
             }
         }
-        // Fewest tool changes inside the block: by tool, stable.
+        // Fewest tool changes inside the block: by tool, larger tools first
+        // (a feature's wall rest passes finish what its larger tool left),
+        // stable.
         v.retain(|i| !is_rest_pass(*i));
-        v.sort_by(|a, b| plan.operations[*a].tool.cmp(&plan.operations[*b].tool));
+        v.sort_by(|&a, &b| {
+            let (oa, ob) = (&plan.operations[a], &plan.operations[b]);
+            diameter(ob)
+                .total_cmp(&diameter(oa))
+                .then_with(|| oa.tool.cmp(&ob.tool))
+        });
         v
     };
     let mut done: BTreeSet<MachiningFeatureId> = BTreeSet::new();
@@ -217,7 +241,7 @@ fn order_with_edges(
     // operations in `out`).
     let mut flute_of: BTreeMap<MachiningFeatureId, f64> = BTreeMap::new();
     for o in plan.operations.iter().filter(|o| !crate::runs_last(o)) {
-        let l = flutes.get(&o.tool).copied().unwrap_or(0.0);
+        let l = sizes.get(&o.tool).map_or(0.0, |s| s.flute_length);
         let e = flute_of.entry(o.feature).or_insert(l);
         *e = e.min(l);
     }
@@ -228,9 +252,16 @@ fn order_with_edges(
             (at, i)
         })
         .collect();
-    rest.sort_by_key(|&(at, i)| {
-        let o = &plan.operations[i];
-        (at, o.tool.clone(), place.get(&o.feature).copied(), i)
+    // Larger tools first: a feature's wall rest passes each finish what the
+    // larger tool before them left (stage 7 plans them so), and one tool
+    // change serves all passes of a tool.
+    rest.sort_by(|&(at_a, a), &(at_b, b)| {
+        let (oa, ob) = (&plan.operations[a], &plan.operations[b]);
+        at_a.cmp(&at_b)
+            .then(diameter(ob).total_cmp(&diameter(oa)))
+            .then_with(|| oa.tool.cmp(&ob.tool))
+            .then_with(|| place.get(&oa.feature).cmp(&place.get(&ob.feature)))
+            .then(a.cmp(&b))
     });
     let mut merged = Vec::with_capacity(out.len() + rest.len());
     let mut rest = rest.into_iter().peekable();

@@ -225,3 +225,37 @@ fn rest_passes_run_before_the_features_below_them() {
     assert!(at(4) > at(1) && at(4) > at(2), "{order:?}");
     assert!(at(5) > at(1) && at(5) > at(2), "{order:?}");
 }
+
+#[test]
+fn a_features_passes_run_larger_tools_first_whatever_their_names() {
+    use Adjacency::{Feature, Open, Product};
+    let k = thinplan_knowledge::Knowledge::builtin().unwrap();
+    let mut plan = common::plan_with(vec![common::feature(
+        0,
+        vec![
+            common::v(0.0, 0.0),
+            common::v(50.0, 0.0),
+            common::v(50.0, 30.0),
+            common::v(0.0, 30.0),
+        ],
+        vec![],
+        vec![Open, Open, Product, Open],
+        Feature,
+        (0.0, 10.0),
+    )]);
+    plan.setup.tool_set = "alu_hsm".into();
+    plan.stages_done.push(Stage::Operations);
+    // Stage 7's order: the feature's tool, a wall rest with it, then rest
+    // passes after it, each with a smaller tool than the last. By name
+    // "em10_r1" < "em12_r1" < "em16_r1" < "em20_r1".
+    plan.operations.push(op(0, 0, "em20_r1", 0.0));
+    plan.operations.push(op(1, 0, "em10_r1", 0.0));
+    for (id, tool) in [(2, "em16_r1"), (3, "em12_r1"), (4, "em10_r1")] {
+        let mut o = op(id, 0, tool, 0.0);
+        o.schedule = Schedule::AfterFeature;
+        plan.operations.push(o);
+    }
+    let order = thinplan_operations::order(&plan, &k).unwrap();
+    let ids: Vec<u32> = order.iter().map(|o| o.0).collect();
+    assert_eq!(ids, vec![0, 1, 2, 3, 4]);
+}
