@@ -597,3 +597,82 @@ fn a_cut_out_as_wide_as_the_tool_gets_its_sides_finished() {
         }
     }
 }
+
+/// A pocket open along one side, its far corners rounded for the Ø20, with
+/// an island 18 mm below its far wall: the Ø20 never comes between them,
+/// the Ø16 (corner radius 1) finishes both walls of the gap at every level
+/// and leaves its fillet along their feet. The floor rest pass (corner
+/// radius 0.5) finishes that fillet too: at 0.3 mm from each wall, along the
+/// gap's middle, the lowest tip of any cutting move's bull-nose envelope
+/// lies within 0.05 mm of the floor (the Ø16 alone leaves 0.29 mm).
+#[test]
+fn the_floor_rest_pass_finishes_the_fillet_a_wall_rest_pass_leaves() {
+    // Resolved features have straight edges: the corners as 24 chords each.
+    let corner = |c: (f64, f64), from: f64| {
+        (0..24).map(move |k| {
+            let a = (from + 90.0 * k as f64 / 24.0).to_radians();
+            v(c.0 + 10.5 * a.cos(), c.1 + 10.5 * a.sin())
+        })
+    };
+    let mut outer = vec![v(0.0, 0.0), v(60.0, 0.0)];
+    outer.extend(corner((49.5, 29.5), 0.0));
+    outer.extend(corner((10.5, 29.5), 90.0));
+    outer.push(v(0.0, 29.5));
+    let mut side = vec![Adjacency::Product; outer.len()];
+    side[0] = Adjacency::Open;
+    let f = feature(
+        0,
+        outer,
+        vec![vec![
+            v(20.0, 12.0),
+            v(20.0, 26.0),
+            v(40.0, 26.0),
+            v(40.0, 12.0),
+        ]],
+        side,
+        Adjacency::Product,
+        (2.0, 8.0),
+    );
+    let k = Knowledge::builtin().unwrap();
+    let mut plan = plan_with(vec![f.clone()]);
+    plan.setup.tool_set = "alu_hsm".into();
+    with_blank(&mut plan, [0.0, 0.0, 60.0, 40.0]);
+    let ops = operations(&plan, &k).unwrap();
+    assert!(ops.refusals.is_empty(), "{:?}", ops.refusals);
+    let tools = &k.tool_set("alu_hsm").unwrap().tools;
+    let z = f.shape.z_min;
+    // (a, b, R, corner radius) of every cutting stretch
+    let mut cuts = Vec::new();
+    for op in &ops.operations {
+        let t = tools.iter().find(|t| t.id == op.tool).unwrap();
+        for w in walk(op, 0.02).windows(2) {
+            if is_cutting(w[1].2) {
+                cuts.push((w[0].0, w[1].0, 0.5 * t.diameter, t.corner_radius));
+            }
+        }
+    }
+    let lowest = |p: DVec2| {
+        cuts.iter()
+            .filter_map(|&(a, b, big, r)| {
+                let d = seg_dist(p, a.truncate(), b.truncate());
+                if d > big {
+                    return None;
+                }
+                let out = (d - (big - r)).max(0.0);
+                let lift = r - (r * r - out * out).max(0.0).sqrt();
+                Some(a.z.max(b.z) + lift)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    for y in [26.3, 39.7] {
+        for j in 0..=8 {
+            let p = DVec2::new(26.0 + j as f64, y);
+            let h = lowest(p);
+            assert!(
+                h <= z + 0.05,
+                "at {p} the floor is left {:.3} mm high",
+                h - z
+            );
+        }
+    }
+}

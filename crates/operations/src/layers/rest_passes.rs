@@ -81,6 +81,11 @@ fn disc_samples(p: DVec2, r: f64) -> impl Iterator<Item = DVec2> {
     }))
 }
 
+/// How far inside what a larger tool swept the smaller tool's disc may
+/// still count as inside it (mm): chains at exactly the smaller radius from
+/// the walls are inside.
+const HAIR: f64 = 1e-2;
+
 /// Provenance value (1) of a wall rest pass for orphan stretches
 /// ([`Rest::Orphan`]).
 const ORPHAN: &str = "orphan_stretches";
@@ -105,7 +110,8 @@ enum Rest<'k> {
 /// where that radius is smaller than the feature tool's by
 /// `min_corner_gain`, only along stretches where the feature's tool has been
 /// beside the wall (its centre region grown by the difference of the
-/// radii), so the pass cuts the fillet and nothing more.
+/// radii) or a wall rest pass cut at the floor round the smaller disc, so
+/// the pass cuts the fillets their corner radii leave and nothing more.
 ///
 /// `Wall` (`methods.<id>.wall_rest`): boundary passes at every level with
 /// the largest tool smaller than the feature's, only along stretches where
@@ -133,7 +139,7 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     // stretches are cut last: the whole free space is cleared by then.
     let cleared = match rest {
         Rest::Orphan(..) => g2.centre_polys.clone(),
-        _ => c.g.centre.offset(-(c.g.r - g2.r + 1e-2)).polygons(STEP),
+        _ => c.g.centre.offset(-(c.g.r - g2.r + HAIR)).polygons(STEP),
     };
     if cleared.is_empty() {
         return Ok(None);
@@ -146,8 +152,9 @@ fn rest_pass(c: &RestCtx, rest: Rest) -> Result<Option<LocalOp>, String> {
     } else {
         intersect_polys(&cleared, &g2.centre_polys)
     };
-    // The floor pass runs where the feature's tool was beside the wall; the
-    // wall pass where it stayed more than `min_left` away.
+    // The floor pass runs where the feature's tool (or a wall rest pass,
+    // `wanted`) was beside the wall; the wall pass where it stayed more
+    // than `min_left` away.
     let (beside, want_inside, run_up) = match rest {
         Rest::Floor(rp) => (cleared.clone(), true, rp.run_up),
         Rest::Wall(w) => (
@@ -373,10 +380,11 @@ fn wanted(
                         .any(|&z| !c.own_cuts.covers(p.extend(z), g2.r, w.min_left))
                 })
         }
-        Rest::Floor(_) => e
-            .sample(STEP)
-            .iter()
-            .all(|p| inside(*p, beside) == want_inside),
+        // where the feature's tool or a wall rest pass at the floor came
+        // beside the wall and left its corner radius's fillet
+        Rest::Floor(_) => e.sample(STEP).iter().all(|p| {
+            inside(*p, beside) == want_inside || c.own_cuts.covers(p.extend(c.z_min), g2.r, HAIR)
+        }),
     }
 }
 
@@ -614,7 +622,13 @@ pub(super) fn rest_passes(
         .as_ref()
         .filter(|_| bottom_product && !ops.is_empty() && !g.product.is_empty())
     {
-        match rest_pass(ctx, Rest::Floor(rp)) {
+        // The wall rest passes' floor fillets too.
+        let own_cuts = cuts_of(env, ops);
+        let c = RestCtx {
+            own_cuts: &own_cuts,
+            ..ctx.clone_shallow()
+        };
+        match rest_pass(&c, Rest::Floor(rp)) {
             Ok(Some(op)) => ops.push(op),
             Ok(None) => {}
             Err(e) => warnings.push(format!("{}: no rest pass: {e}", f.id)),
