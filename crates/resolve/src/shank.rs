@@ -21,9 +21,7 @@ pub const RULE_SHANK: &str = "interference.shank_access";
 const OFF: f64 = 1e-3;
 
 /// Adds `N before F` for every feature N that stands in F's reach zone above
-/// F's bottom plus a flute length, for every tool of the set that may cut F
-/// (`fitting`): where one of them clears N, stage 7 can choose it, and
-/// a request that other features must come first is no need of F's.
+/// F's bottom plus a flute length, for some tool of the set.
 ///
 /// Shallow features ask first (bottom highest, then id): in a top-down
 /// sequence they are cut first, and when two neighbours each stand in the
@@ -47,7 +45,6 @@ pub(crate) fn shank_access(
         if open.is_empty() {
             continue;
         }
-        let tools = fitting(gf, tools);
         let zones: Vec<Shapes> = tools
             .iter()
             .map(|t| reach_zone(gf, &open, slabs, t.diameter))
@@ -56,9 +53,7 @@ pub(crate) fn shank_access(
             if n == f {
                 continue;
             }
-            // Every tool that may cut F would rub N: the one with the
-            // longest flutes names the constraint.
-            let rubs = |t: &Tool, zone: &Shapes| {
+            let found = tools.iter().zip(&zones).find_map(|(t, zone)| {
                 if zone.is_empty()
                     || top(gn) <= gf.lo + t.flute_length + EPS_Z
                     || gn.lo >= top(gf) + t.stickout
@@ -67,17 +62,9 @@ pub(crate) fn shank_access(
                     return None;
                 }
                 let common = section::area(&section::intersection(&gn.region, zone));
-                (common > sliver).then_some(common)
-            };
-            let found: Option<Vec<(&Tool, f64)>> = tools
-                .iter()
-                .zip(&zones)
-                .map(|(&t, zone)| rubs(t, zone).map(|common| (t, common)))
-                .collect();
-            let Some((t, common)) = found.and_then(|all| {
-                all.into_iter()
-                    .max_by(|a, b| a.0.flute_length.total_cmp(&b.0.flute_length))
-            }) else {
+                (common > sliver).then_some((t, common))
+            });
+            let Some((t, common)) = found else {
                 continue;
             };
             // Already ordered by other rules: nothing to add.
@@ -115,25 +102,6 @@ pub(crate) fn shank_access(
             );
         }
     }
-}
-
-/// The tools of the set that may cut F: those whose disc fits its region
-/// somewhere, or, where none does (a strip reached from beside), the
-/// smallest.
-fn fitting<'t>(g: &Geo, tools: &'t [Tool]) -> Vec<&'t Tool> {
-    // A disc that fits, every smaller one fits: largest first.
-    let mut sizes: Vec<f64> = tools.iter().map(|t| t.diameter).collect();
-    sizes.sort_by(|a, b| b.total_cmp(a));
-    sizes.dedup();
-    let largest = sizes
-        .iter()
-        .copied()
-        .find(|d| !section::offset(&g.region, -0.5 * d).is_empty())
-        .or(sizes.last().copied());
-    let Some(largest) = largest else {
-        return Vec::new();
-    };
-    tools.iter().filter(|t| t.diameter <= largest).collect()
 }
 
 /// F's side edges (outer contour and holes) whose outward neighbour is not
@@ -238,49 +206,4 @@ fn reaches_without(out: &Resolution, rule: &str, from: usize, to: usize) -> bool
         }
     }
     false
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn geo(w: f64, h: f64) -> Geo {
-        Geo {
-            region: section::rect([0.0, 0.0], [w, h]),
-            bbox: [0.0, 0.0, w, h],
-            lo: 0.0,
-            top_slab: 0,
-            bottom_slab: 0,
-        }
-    }
-
-    fn set() -> Vec<Tool> {
-        let k = thinplan_knowledge::Knowledge::builtin().unwrap();
-        k.tool_set("alu_hsm").unwrap().tools.clone()
-    }
-
-    /// A wide region may be cut by every tool; a 14 mm strip by those no
-    /// wider than 14; one narrower than every tool by the smallest (reached
-    /// from beside).
-    #[test]
-    fn the_tools_that_may_cut_a_feature_are_those_that_fit_it() {
-        let tools = set();
-        let ids =
-            |g: &Geo| -> Vec<String> { fitting(g, &tools).iter().map(|t| t.id.clone()).collect() };
-        assert_eq!(ids(&geo(40.0, 40.0)).len(), tools.len());
-        let strip = fitting(&geo(14.0, 60.0), &tools);
-        assert!(!strip.is_empty() && strip.iter().all(|t| t.diameter <= 14.0));
-        assert!(strip.iter().any(|t| t.diameter == 12.0));
-        let smallest = tools
-            .iter()
-            .map(|t| t.diameter)
-            .fold(f64::INFINITY, f64::min);
-        let sliver = ids(&geo(2.0, 60.0));
-        let expected: Vec<String> = tools
-            .iter()
-            .filter(|t| t.diameter == smallest)
-            .map(|t| t.id.clone())
-            .collect();
-        assert_eq!(sliver, expected);
-    }
 }

@@ -274,23 +274,12 @@ fn the_switch_turns_the_rule_off() {
 /// in the way (a chain of other rules' constraints puts the second first);
 /// where this rule's own earlier constraints already decided the pair, the
 /// request is dropped silently. Checked on every sample, independently of
-/// the graph inside resolve. Every tool's flutes cut to 5 mm, so that no
-/// tool that fits clears its neighbours and the requests meet the other
-/// rules on the samples.
+/// the graph inside resolve.
 #[test]
 fn shank_refusals_are_recorded_only_against_other_rules() {
-    let short = || {
-        let mut k = load_knowledge(None).expect("builtin knowledge");
-        for set in k.tool_sets.values_mut() {
-            for t in &mut set.tools {
-                t.flute_length = t.flute_length.min(5.0);
-            }
-        }
-        k
-    };
     let mut recorded = 0;
     for name in samples() {
-        let s = planned_with(name, short());
+        let s = planned(name);
         let plan = &s.plan;
         let by_others =
             |a: usize, b: usize| reaches_by(plan, a, b, |c| c.provenance.rule != RULE_SHANK);
