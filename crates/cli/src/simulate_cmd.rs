@@ -91,6 +91,7 @@ pub fn run(args: &SimulateArgs) -> Result<bool, String> {
         checks: thinplan_stocksim::MoveChecks {
             max_descent_deg: args.max_descent_deg,
             tol: args.tol,
+            rim: args.wall_tol,
             ..Default::default()
         },
     };

@@ -14,7 +14,9 @@ pub struct VerificationKnowledge {
     /// Gouge and cut tolerance, mm.
     pub tolerance: f64,
     /// How near a part face may pass to a cell centre and still not be
-    /// judged there, mm: the part's tessellation error, not `tolerance`.
+    /// judged there, and how near the tool's edge a cut may lie and still
+    /// not count as a plunge or shank contact, mm: the part's tessellation
+    /// error, not `tolerance`.
     pub wall_tolerance: f64,
     /// The replays' grids, each where its cells start as a fraction of a
     /// cell past the blank's corner (`[0, 1)`): the first one's leftover

@@ -26,6 +26,9 @@ pub struct PartField {
     /// mm away: a wall within `far` of a centre does not turn material at
     /// its foot into leftover.
     pub hi: Vec<f32>,
+    /// Whether a part face passes within `near` of the centre: one of the
+    /// tops `near` away differs from the centre's by more than `far`.
+    pub face: Vec<bool>,
 }
 
 /// The part's height field by vertical rays (see [`PartField`]): `near` is
@@ -66,7 +69,13 @@ pub fn part_heights(
     };
     let lo = around(near, f32::min);
     let hi = around(far, f32::max);
-    (PartField { top, lo, hi }, warnings)
+    let near_hi = around(near, f32::max);
+    let face = top
+        .iter()
+        .zip(lo.iter().zip(&near_hi))
+        .map(|(&t, (&l, &h))| (t - l) as f64 > far || (h - t) as f64 > far)
+        .collect();
+    (PartField { top, lo, hi, face }, warnings)
 }
 
 /// Highest ray hit per cell, rays at the cell centres shifted by `off`.

@@ -221,6 +221,7 @@ pub fn simulate(
         let tol = cfg.tol as f32;
         stock.guard = Some(field.lo.iter().map(|&l| l - tol).collect());
     }
+    stock.faces = Some(field.face.clone());
     let t0 = Instant::now();
     let rs = stock.replay_checked(program, tools, &cfg.checks)?;
     let replay_time = t0.elapsed();

@@ -178,6 +178,9 @@ pub struct CutStats {
     pub max_depth: f64,
     /// Where that was (cell centre, new height).
     pub deepest: DVec3,
+    /// Deepest cut in a cell but the slivers on part faces
+    /// ([`ZMap::faces`]), mm: what the plunge and shank checks judge.
+    pub core_depth: f64,
     /// Deepest cut below the guard ([`ZMap::guard`]), mm, and where.
     pub gouge: f64,
     pub gouge_at: DVec3,
@@ -192,6 +195,7 @@ impl CutStats {
             self.max_depth = o.max_depth;
             self.deepest = o.deepest;
         }
+        self.core_depth = self.core_depth.max(o.core_depth);
         if o.gouge > self.gouge {
             self.gouge = o.gouge;
             self.gouge_at = o.gouge_at;
@@ -239,6 +243,10 @@ pub struct MoveChecks {
     /// Cuts shallower than this (mm) are not counted as plunges or shank
     /// contact: the comparison tolerance.
     pub tol: f64,
+    /// A cell on a part face ([`ZMap::faces`]) the tool's edge reaches by
+    /// no more than this (mm) is not counted as a plunge or shank contact:
+    /// it stands for a sliver a faceted face left, not for a column.
+    pub rim: f64,
     /// The program's operations, `(first line, id)` in line order. When
     /// given, an operation one of whose moves crashes (or, with a guard,
     /// gouges) is undone and the rest of it skipped, so that the operations
@@ -255,7 +263,7 @@ impl MoveChecks {
         };
         let drop = start.z - m.end.z;
         if drop <= 1e-9
-            || st.max_depth <= self.tol.max(REMOVAL_EPS)
+            || st.core_depth <= self.tol.max(REMOVAL_EPS)
             || st.volume <= self.max_plunge_mm3
         {
             return false;
@@ -271,7 +279,7 @@ impl MoveChecks {
     fn shank(&self, tool: u32, st: &CutStats) -> bool {
         self.flute_length
             .get(&tool)
-            .is_some_and(|&l| st.max_depth > l + self.tol)
+            .is_some_and(|&l| st.core_depth > l + self.tol)
     }
 }
 
@@ -326,6 +334,11 @@ pub struct ZMap {
     /// The lowest each cell may be cut without a gouge (the part less the
     /// tolerance); a cut below it is reported in [`CutStats::gouge`].
     pub guard: Option<Vec<f32>>,
+    /// Cells a part face passes within the wall tolerance of. There a cut
+    /// only within [`MoveChecks::rim`] of the tool's edge takes a sliver
+    /// left on the face (no thicker than the two together), not a column:
+    /// it is no plunge or shank contact. `None`: no cell is such a cell.
+    pub faces: Option<Vec<bool>>,
     /// While an operation is replayed in exclusion mode: each cell's state
     /// before its first change, to undo it.
     undo: Option<Vec<(usize, f32, u32)>>,
@@ -337,6 +350,8 @@ pub struct ZMap {
     /// cells under it are already as low as that tool there makes them, so
     /// the next move from that point need not visit them again.
     last_end: Option<(DVec3, f64, f64)>,
+    /// The rim band of [`MoveChecks::rim`] the replay judges with.
+    rim: f64,
 }
 
 impl ZMap {
@@ -365,10 +380,12 @@ impl ZMap {
             top: vec![blank.max.z as f32; grid.len()],
             last_line: vec![0; grid.len()],
             guard: None,
+            faces: None,
             undo: None,
             saved: Vec::new(),
             generation: 0,
             last_end: None,
+            rim: 0.0,
         })
     }
 
@@ -389,8 +406,11 @@ impl ZMap {
         Some(self.top[j as usize * g.nx + i as usize] as f64)
     }
 
+    /// Lowers cell `(i, j)` to `z`; `core` when the cell's centre is
+    /// farther than the rim band inside the tool's edge (see
+    /// [`ZMap::faces`]).
     #[inline]
-    fn lower(&mut self, i: usize, j: usize, z: f64, line: u32, st: &mut CutStats) {
+    fn lower(&mut self, i: usize, j: usize, z: f64, line: u32, core: bool, st: &mut CutStats) {
         st.visited += 1;
         let k = j * self.grid.nx + i;
         let z = z.max(self.blank.min.z) as f32;
@@ -421,6 +441,10 @@ impl ZMap {
                 st.max_depth = depth;
                 let c = self.grid.center(i, j);
                 st.deepest = DVec3::new(c.x, c.y, z as f64);
+            }
+            let sliver = !core && self.faces.as_ref().is_some_and(|f| f[k]);
+            if !sliver && depth > st.core_depth {
+                st.core_depth = depth;
             }
         }
     }
@@ -469,7 +493,8 @@ impl ZMap {
                     }
                     let rho = (self.grid.center(i, j) - a).length();
                     if let Some(h) = tool.height_at(rho.min(tool.radius())) {
-                        self.lower(i, j, z + h, line, &mut st);
+                        let core = rho <= tool.radius() - self.rim;
+                        self.lower(i, j, z + h, line, core, &mut st);
                     }
                 }
             }
@@ -528,7 +553,16 @@ impl ZMap {
                         .min(tool.radius());
                     p0.z + k * s + tool.height_at(rho).unwrap_or(0.0)
                 };
-                self.lower(i, j, z, line, &mut st);
+                // Nearest the axis comes to the cell along the move.
+                let near = if s0 < 0.0 {
+                    w.length()
+                } else if s0 > len {
+                    (self.grid.center(i, j) - b).length()
+                } else {
+                    perp
+                };
+                let core = near <= tool.radius() - self.rim;
+                self.lower(i, j, z, line, core, &mut st);
             }
         }
         st
@@ -596,7 +630,8 @@ impl ZMap {
                     continue;
                 }
                 if let Some(h) = tool.height_at(dist) {
-                    self.lower(i, j, z + h, line, &mut st);
+                    let core = dist <= tool.radius() - self.rim;
+                    self.lower(i, j, z + h, line, core, &mut st);
                 }
             }
         }
@@ -674,6 +709,7 @@ impl ZMap {
         checks: &MoveChecks,
     ) -> Result<ReplayStats, SimError> {
         let mut out = ReplayStats::default();
+        self.rim = checks.rim.max(0.0);
         let mut used = std::collections::BTreeSet::new();
         let mut warned_no_tool = false;
         let ops = &checks.operations;

@@ -257,6 +257,7 @@ fn leftover_is_missed_only_where_a_tool_reaches_the_part() {
         top: f(1),
         lo: f(1),
         hi: f(1),
+        face: vec![false; cells.len()],
     };
     let got = classify(&f(0), &part, &f(2), 0.05);
     let want: Vec<CellClass> = cells.iter().map(|c| c.3).collect();

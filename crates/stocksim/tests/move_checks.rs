@@ -23,15 +23,19 @@ fn checks(flute: f64) -> MoveChecks {
         max_descent_deg: Some(45.0),
         max_plunge_mm3: 0.5,
         tol: 0.05,
+        rim: 0.0,
         operations: Vec::new(),
     }
 }
 
 fn crashes(body: &str, c: &MoveChecks) -> Vec<CrashKind> {
+    crashes_on(block(), body, c)
+}
+
+fn crashes_on(mut z: ZMap, body: &str, c: &MoveChecks) -> Vec<CrashKind> {
     let text = format!("G21 G90 G17\nT1 M6\nS10000 M3\n{body}\nM5\nM30\n");
     let prog = parse(&text, "t.ngc").unwrap();
     let tools = parse_tool_table("T1 P1 D10 ;em10 r0.5\n", "t.tbl").unwrap();
-    let mut z = block();
     let rs = z.replay_checked(&prog, &tools, c).unwrap();
     rs.crashes.iter().map(|c| c.kind).collect()
 }
@@ -68,6 +72,34 @@ fn a_cut_deeper_than_the_flutes_is_shank_contact() {
     let body = "G0 X-10 Y20 Z40\nG0 Z22\nG1 X30 F500";
     assert_eq!(crashes(body, &checks(5.0)), vec![CrashKind::ShankContact]);
     assert!(crashes(body, &checks(12.0)).is_empty());
+}
+
+/// A move whose edge only just reaches the first column of cells (their
+/// centres 5 µm inside it) grazes a sliver where a part face runs along
+/// those cells: within a 10 µm rim band it is no shank contact; where no
+/// face runs, or 1 mm in, it is.
+#[test]
+fn a_graze_of_a_face_sliver_within_the_rim_band_is_not_shank_contact() {
+    let on_face = || {
+        let mut z = block();
+        let nx = z.grid.nx;
+        z.faces = Some((0..z.grid.len()).map(|k| k % nx == 0).collect());
+        z
+    };
+    let graze = "G0 X-4.745 Y-10 Z40\nG0 Z22\nG1 Y50 F500";
+    let mut c = checks(5.0);
+    assert_eq!(
+        crashes_on(on_face(), graze, &c),
+        vec![CrashKind::ShankContact]
+    );
+    c.rim = 0.01;
+    assert!(crashes_on(on_face(), graze, &c).is_empty());
+    assert_eq!(crashes(graze, &c), vec![CrashKind::ShankContact]);
+    let cut = "G0 X-4 Y-10 Z40\nG0 Z22\nG1 Y50 F500";
+    assert_eq!(
+        crashes_on(on_face(), cut, &c),
+        vec![CrashKind::ShankContact]
+    );
 }
 
 #[test]

@@ -347,6 +347,7 @@ fn replay(
             max_descent_deg: Some(cfg.max_descent_deg),
             max_plunge_mm3: cfg.max_plunge_mm3,
             tol: cfg.tolerance,
+            rim: cfg.wall_tolerance,
             operations: nc
                 .operation_lines
                 .iter()
