@@ -176,7 +176,8 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
     }
     let kn = &k.interference;
     let frame = Frame::from_axis_ref(DVec3::ZERO, up.normalize(), None);
-    let mesh = thinplan_brep::tess::tessellate(brep, &brep.mass_tolerance());
+    let tess = brep.mass_tolerance();
+    let mesh = thinplan_brep::tess::tessellate(brep, &tess);
     if mesh.triangles.is_empty() {
         return Err(ResolveError::EmptyPart);
     }
@@ -530,7 +531,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
             )),
         }
     }
-    blocked_from_up(&geo, &slabs, kn.sliver_area, &mut out);
+    blocked_from_up(&geo, &slabs, (kn.sliver_area, tess.chord), &mut out);
     out.order = graph.topological_order();
     adjacency(&mut out, &geo, &slabs, [lo.x, lo.y, hi.x, hi.y], lo.z);
     let reach = (hi - lo).length();
@@ -1187,12 +1188,15 @@ pub const RULE_BLOCKED: &str = "interference.access_blocked";
 /// A feature with product above it (an undercut: a hole through a standing
 /// wall, material under an overhang) cannot be reached along up in this
 /// set-up: it is marked (`access_blocked` = 1 in its provenance) and a
-/// refusal says why, so later stages leave it to another set-up.
-fn blocked_from_up(geo: &[Geo], slabs: &[Slab], sliver: f64, out: &mut Resolution) {
+/// refusal says why, so later stages leave it to another set-up. The
+/// sections are the mesh's, each up to its `chord` off a curved face and
+/// not the same chords at every height: product above that overlaps the
+/// region by no more than that is the same face, not a cover.
+fn blocked_from_up(geo: &[Geo], slabs: &[Slab], (sliver, chord): (f64, f64), out: &mut Resolution) {
     for (i, g) in geo.iter().enumerate() {
         let covered = slabs[g.top_slab + 1..]
             .iter()
-            .map(|s| section::area(&section::intersection(&g.region, &s.part)))
+            .map(|s| covered_area(&g.region, &s.part, sliver, chord))
             .fold(0.0, f64::max);
         if covered > sliver {
             let f = &mut out.features[i];
@@ -1219,6 +1223,17 @@ fn blocked_from_up(geo: &[Geo], slabs: &[Slab], sliver: f64, out: &mut Resolutio
             });
         }
     }
+}
+
+/// The area of `region` the section `above` covers, less a band of
+/// `chord` (the sections' own error) along its edges; 0 when no more than
+/// `sliver` overlaps at all.
+fn covered_area(region: &Shapes, above: &Shapes, sliver: f64, chord: f64) -> f64 {
+    let over = section::intersection(region, above);
+    if section::area(&over) <= sliver {
+        return 0.0;
+    }
+    section::area(&section::offset(&over, -chord))
 }
 
 /// A feature lying on top of another (touching, overlapping in plan view)
@@ -1370,6 +1385,27 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
+        /// Product above a region covers it only where it overlaps by more
+        /// than the sections' chord: a band narrower than twice the chord
+        /// is the same face sectioned at two heights, a wider one an
+        /// overhang, covered less the chord along its edges.
+        #[test]
+        fn only_an_overlap_wider_than_the_chord_covers_a_region(
+            width in 1e-4f64..0.5,
+            chord in 1e-3f64..0.05,
+        ) {
+            prop_assume!((width - 2.0 * chord).abs() > 0.1 * chord);
+            let region = section::rect([0.0, 0.0], [20.0, 10.0]);
+            let above = section::rect([20.0 - width, 0.0], [30.0, 10.0]);
+            let covered = covered_area(&region, &above, 1e-4, chord);
+            if width < 2.0 * chord {
+                prop_assert!(covered == 0.0, "{covered}");
+            } else {
+                let want = (width - 2.0 * chord) * (10.0 - 2.0 * chord);
+                prop_assert!((covered - want).abs() < 1e-3 * want + 1e-9, "{covered} vs {want}");
+            }
+        }
+
         /// A strip beside a claimed piece joins it when it holds no disc of
         /// the radius, and stays remaining material when it does; the area
         /// is kept either way.
