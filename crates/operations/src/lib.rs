@@ -13,6 +13,7 @@
 //! times from `thinplan-feeds` under the machine's limits. [`order`] is
 //! stage 8.
 
+mod arcs;
 mod breakthrough;
 mod caps;
 mod coverage;
@@ -869,9 +870,10 @@ fn length_and_time<'a>(
 fn to_operation(
     id: OperationId,
     f: &thinplan_plan::MachiningFeature,
-    lo: layers::LocalOp,
+    mut lo: layers::LocalOp,
     env: &layers::Env,
 ) -> Operation {
+    lo.moves = arcs::fit(lo.start, std::mem::take(&mut lo.moves));
     let z = f.shape.frame.z.normalize_or_zero();
     let to_part2 = |c: DVec2, zz: f64| to_part(f, c, zz);
     let to_part = |p: DVec3| to_part(f, p.truncate(), p.z);
