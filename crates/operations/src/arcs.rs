@@ -1,9 +1,9 @@
 //! Runs of straight moves whose points lie on one circle become one arc.
 //!
-//! Stage 6's sections follow a round face by its circle's lattice (chords
-//! within a fraction of a micrometre), and a pass offset from it keeps those
-//! points: hundreds of G1 moves a few hundredths of a millimetre long round
-//! every fillet. A run of such moves at one height, of one kind, whose
+//! A pass offset from a section that follows a round face through many
+//! points on its circle keeps those points: hundreds of G1 moves a few
+//! hundredths of a millimetre long round every fillet where one arc would
+//! do. A run of such moves at one height, of one kind, whose
 //! points all lie on a circle is written as that circle's arc (G2/G3): the
 //! arc passes through every point of the run and leaves no chord by more
 //! than [`MAX_BULGE`], so the tool's path moves by no more than that.
