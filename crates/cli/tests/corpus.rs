@@ -643,10 +643,16 @@ fn an_edge_on_a_vertical_face_reads_that_face_at_every_height() {
 /// fillets that no tool fits, and every layer below such a sliver was
 /// refused with it ("unreachable: MF38 above it is"): 13 979 mm³ of web
 /// left, 14 525 mm³ missed by the checker. A layer below a feature that
-/// gets no operation is now planned on what lies outside that feature's
-/// footprint, and only the material under the footprint is left.
+/// gets no operation is planned on what lies outside that feature's
+/// footprint (`operations/src/covered.rs`, unit-tested there). The slivers
+/// themselves are remaining material too narrow for any tool, to be joined
+/// to the web layer beside them; nine stayed features of their own because
+/// the union kept a crack along the edge they share with the layer (its two
+/// sides written by two overlays in different last bits). Now none is
+/// refused for want of a tool, nothing is left under a feature without
+/// operations, and the checker finds under 50 mm³ missed.
 #[test]
-fn a_sliver_no_tool_fits_leaves_its_footprint_not_the_layers_below() {
+fn slivers_in_web_fillets_join_the_layer_beside_them_and_nothing_is_left_below() {
     let one = plan_one("corpus-sliver-footprint", "pocket_frame_04");
     let name = one.p.name.as_str();
     let saved = one.saved();
@@ -662,7 +668,7 @@ fn a_sliver_no_tool_fits_leaves_its_footprint_not_the_layers_below() {
             slivers += 1;
         }
     }
-    assert!(slivers > 0, "{name}: no sliver without a tool any more");
+    assert_eq!(slivers, 0, "{name}: slivers no tool fits stay features");
     assert!(
         covered < 50.0,
         "{name}: {covered:.1} mm³ left under features without operations"

@@ -29,6 +29,7 @@ use thinplan_plan::{
 };
 
 mod beyond;
+mod narrow;
 pub mod section;
 mod shank;
 mod slopes;
@@ -305,7 +306,7 @@ pub fn resolve(plan: &Plan, brep: &Brep, k: &Knowledge) -> Result<Resolution, Re
             .partition(|s| section::shape_area(s) > kn.sliver_area);
         out.volumes.slivers += section::area(&drop) * (slab.hi - slab.lo);
         if let Some(r) = narrow_radius {
-            for (ci, a) in join_narrow(&mut keep, &mut joinable, r, kn.sliver_area) {
+            for (ci, a) in narrow::join_narrow(&mut keep, &mut joinable, r, kn.sliver_area) {
                 *joined.entry(ci).or_default() += a * (slab.hi - slab.lo);
             }
         }
@@ -645,53 +646,6 @@ fn flatten(lp: &ProfileLoop) -> Vec<(f64, f64)> {
         }
     }
     out
-}
-
-/// Joins each remaining shape that holds no disc of `radius` (nothing of
-/// it is left inset by the radius) to the claimed piece it borders longest
-/// in the slab: cut with that piece, it needs no tool of its own. Returns
-/// the claims that grew, with the area each took.
-fn join_narrow(
-    keep: &mut Shapes,
-    taken: &mut [(usize, [f64; 4], Shapes)],
-    radius: f64,
-    sliver_area: f64,
-) -> Vec<(usize, f64)> {
-    // Borders are measured as the area a thin band around the shape
-    // overlaps: a band as wide as a sliver is long.
-    let band = sliver_area.sqrt();
-    let mut grew = Vec::new();
-    let mut still = Vec::new();
-    for shape in std::mem::take(keep) {
-        let one = vec![shape];
-        if !section::offset(&one, -radius).is_empty() {
-            still.extend(one);
-            continue;
-        }
-        let grown = section::offset(&one, band);
-        let bb = bbox_of(&grown);
-        let best = taken
-            .iter()
-            .enumerate()
-            .filter(|(_, (_, tb, _))| overlaps(tb, &bb))
-            .map(|(i, (_, _, t))| (i, section::area(&section::intersection(&grown, t))))
-            .filter(|(_, a)| *a > sliver_area)
-            .fold(None::<(usize, f64)>, |b, (i, a)| match b {
-                Some((_, ba)) if ba >= a => b,
-                _ => Some((i, a)),
-            });
-        match best {
-            Some((i, _)) => {
-                let t = &mut taken[i];
-                t.2 = section::union(&t.2, &one);
-                t.1 = bbox_of(&t.2);
-                grew.push((t.0, section::area(&one)));
-            }
-            None => still.extend(one),
-        }
-    }
-    *keep = still;
-    grew
 }
 
 /// Stage-5 features as plan-view claims in the set-up frame.
@@ -1406,51 +1360,5 @@ mod tests {
             }
         }
 
-        /// A strip beside a claimed piece joins it when it holds no disc of
-        /// the radius, and stays remaining material when it does; the area
-        /// is kept either way.
-        #[test]
-        fn a_strip_joins_its_neighbour_exactly_when_no_tool_fits_in_it(
-            width in 0.2f64..8.0,
-            radius in 0.5f64..4.0,
-            length in 10.0f64..60.0,
-        ) {
-            prop_assume!((width - 2.0 * radius).abs() > 0.05);
-            let web = section::rect([0.0, width], [length, width + 20.0]);
-            let strip = section::rect([0.0, 0.0], [length, width]);
-            let mut keep = strip.clone();
-            let mut taken = vec![(7, bbox_of(&web), web.clone())];
-            let grew = join_narrow(&mut keep, &mut taken, radius, 1e-4);
-            let narrow = width < 2.0 * radius;
-            prop_assert_eq!(keep.is_empty(), narrow);
-            prop_assert_eq!(grew.len(), usize::from(narrow));
-            let total = section::area(&keep) + section::area(&taken[0].2);
-            prop_assert!((total - length * (width + 20.0)).abs() < 1e-6 * total);
-            if narrow {
-                prop_assert_eq!(grew[0].0, 7);
-                prop_assert_eq!(taken[0].2.len(), 1, "one piece after the join");
-            }
-        }
-    }
-
-    /// A narrow shape that borders no claimed piece stays remaining; one
-    /// between two joins the one it borders longest.
-    #[test]
-    fn a_narrow_shape_joins_the_piece_it_borders_longest_or_none() {
-        let alone = section::rect([100.0, 100.0], [130.0, 101.0]);
-        let long = section::rect([0.0, 1.0], [30.0, 20.0]);
-        let short = section::rect([0.0, -5.0], [10.0, 0.0]);
-        let strip = section::rect([0.0, 0.0], [30.0, 1.0]);
-        let mut keep: Shapes = alone.iter().chain(&strip).cloned().collect();
-        let mut taken = vec![
-            (1, bbox_of(&short), short.clone()),
-            (2, bbox_of(&long), long.clone()),
-        ];
-        let grew = join_narrow(&mut keep, &mut taken, 3.0, 1e-4);
-        assert_eq!(grew.len(), 1);
-        assert_eq!(grew[0].0, 2);
-        assert!((grew[0].1 - 30.0).abs() < 1e-6);
-        assert!(section::same_region(&keep, &alone, 1e-6));
-        assert!(section::same_region(&taken[0].2, &short, 1e-6));
     }
 }

@@ -144,6 +144,35 @@ pub fn union(a: &Shapes, b: &Shapes) -> Shapes {
     a.overlay_as::<i64>(b, OverlayRule::Union, FillRule::NonZero)
 }
 
+/// `s` with each vertex that lies within `tol` of a vertex of `to` moved
+/// onto it: shapes from different overlays that share an edge then share
+/// it bit for bit, and their union has no crack along it.
+pub fn snap_to(s: &Shapes, to: &Shapes, tol: f64) -> Shapes {
+    let mut pts: Vec<[f64; 2]> = to.iter().flatten().flatten().copied().collect();
+    pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    let snap = |p: [f64; 2]| {
+        let from = pts.partition_point(|q| q[0] < p[0] - tol);
+        pts[from..]
+            .iter()
+            .take_while(|q| q[0] <= p[0] + tol)
+            .filter(|q| (q[0] - p[0]).hypot(q[1] - p[1]) <= tol)
+            .min_by(|a, b| {
+                let d = |q: &&[f64; 2]| (q[0] - p[0]).hypot(q[1] - p[1]);
+                d(a).total_cmp(&d(b))
+            })
+            .copied()
+            .unwrap_or(p)
+    };
+    s.iter()
+        .map(|shape| {
+            shape
+                .iter()
+                .map(|c| c.iter().map(|&p| snap(p)).collect())
+                .collect()
+        })
+        .collect()
+}
+
 /// The region grown (`d > 0`) or shrunk (`d < 0`) by `|d|`.
 pub fn offset(s: &Shapes, d: f64) -> Shapes {
     if s.is_empty() {
