@@ -583,17 +583,22 @@ fn retime(plan: &mut Plan, oi: usize, rapid_cap: f64, limits: &MachineLimits) {
     op.provenance.values.insert("time_s".into(), time);
 }
 
-/// Stage 9's repair of an operation whose replay found a feed plunge into
-/// stock that stage 8's map took for air (it is coarser than the replay):
-/// every straight feed descent of operation `id` becomes a ramp from where
-/// the descent starts, at its method's entry angle (the shallowest any
-/// method allows for one not in the knowledge), and the operation is
-/// retimed. Records `entries_ramped_on_replay`; returns how many descents
-/// it ramped (0: none could be, the operation is as it was).
+/// Stage 9's repair of an operation whose replay found a feed plunge
+/// `plunge_depth` deep into stock that stage 8's map took for air (it is
+/// coarser than the replay): every straight feed descent of operation `id`
+/// becomes a ramp at its method's entry angle (the shallowest any method
+/// allows for one not in the knowledge), and the operation is retimed.
+/// A ramp starts just above the highest stock the descent can meet: the
+/// top of the operation's feature (what stands above it was cut before, as
+/// stage 6 ordered it), or the plunge's depth above the highest descent's
+/// end if that is higher; the replay judges the result. Records
+/// `entries_ramped_on_replay`; returns how many descents it ramped (0:
+/// none could be, the operation is as it was).
 pub fn ramp_every_descent(
     plan: &mut Plan,
     k: &Knowledge,
     id: OperationId,
+    plunge_depth: f64,
 ) -> Result<usize, OperationsError> {
     let (_, tools, limits) = resources(plan, k)?;
     let rapid_cap = limits.v_max.iter().copied().fold(0.0, f64::max);
@@ -618,13 +623,14 @@ pub fn ramp_every_descent(
                 .map(|m| m.entry.angle_deg())
                 .fold(45.0, f64::min)
         });
+    let down = |from: DVec3, m: &PathMove| {
+        m.arc.is_none() && is_vertical(from, m.to, &view) && view.z(m.to) < view.z(from) - 1e-6
+    };
+    let stock_top = stock_top(plan, op, plunge_depth, &view, down);
     let mut out = Vec::with_capacity(op.moves.len());
     let mut pos = op.start;
     let mut ramped = 0;
     let mut i = 0;
-    let down = |from: DVec3, m: &PathMove| {
-        m.arc.is_none() && is_vertical(from, m.to, &view) && view.z(m.to) < view.z(from) - 1e-6
-    };
     while i < op.moves.len() {
         let m = &op.moves[i];
         // Fed (G1) straight descents, whatever region they belong to.
@@ -644,7 +650,7 @@ pub fn ramp_every_descent(
         let ramp = crate::ramps::ramp_entry(
             pos,
             to,
-            view.z(pos),
+            stock_top,
             &op.moves[j..],
             angle,
             RAMP_RUN_DIAMETERS * tool.diameter,
@@ -672,6 +678,47 @@ pub fn ramp_every_descent(
         retime(plan, oi, rapid_cap, &limits);
     }
     Ok(ramped)
+}
+
+/// The highest stock (set-up height) a descent of `op` can meet, as
+/// [`ramp_every_descent`] bounds it: its feature's top, or `plunge_depth`
+/// above the highest end of its fed descents (`down`) if that is higher.
+fn stock_top(
+    plan: &Plan,
+    op: &Operation,
+    plunge_depth: f64,
+    view: &View,
+    down: impl Fn(DVec3, &PathMove) -> bool,
+) -> f64 {
+    let feature_top = plan
+        .machining_features
+        .iter()
+        .find(|f| f.id == op.feature)
+        .map_or(f64::NEG_INFINITY, |f| {
+            let l = Local::new(f);
+            f.shape
+                .region
+                .outer
+                .vertices
+                .iter()
+                .map(|v| view.z(l.part(DVec3::new(v.x, v.y, f.shape.z_max))))
+                .fold(f64::NEG_INFINITY, f64::max)
+        });
+    let mut pos = op.start;
+    let mut deepest_end = f64::NEG_INFINITY;
+    for m in &op.moves {
+        if m.feed > 0.0 && down(pos, m) {
+            deepest_end = deepest_end.max(view.z(m.to));
+        }
+        pos = m.to;
+    }
+    let top = feature_top.max(deepest_end + plunge_depth);
+    // No feature and no descent: every descent starts where it is.
+    if top.is_finite() {
+        top
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// Stage 9's remedy for a rapid that met stock: every rapid link inside

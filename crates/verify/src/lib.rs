@@ -89,8 +89,9 @@ pub fn verify(plan: &mut Plan, brep: &Brep, k: &Knowledge) -> Result<(), VerifyE
             };
             if kind == ProblemKind::PlungeIntoStock && !tried(Replan::RampedEntries) {
                 let before = plan.operations.iter().find(|o| o.id == op).cloned();
-                let ramped = thinplan_operations::links::ramp_every_descent(plan, k, op)
-                    .map_err(|e| VerifyError(format!("re-planning {op}'s entries: {e}")))?;
+                let ramped =
+                    thinplan_operations::links::ramp_every_descent(plan, k, op, problem.depth_mm)
+                        .map_err(|e| VerifyError(format!("re-planning {op}'s entries: {e}")))?;
                 if let (true, Some(planned)) = (ramped > 0, before) {
                     replanned.push(ReplannedOperation {
                         operation: op,
