@@ -2,7 +2,7 @@
 //! what it borders: a shape that holds no disc of the tool's radius has no
 //! pass of its own, so it joins the piece of a selected feature
 //! (`interference.narrow_remaining_joins`) it borders longest in its slab
-//! (such as the strip a claim's chord leaves beside a round product face).
+//! (such as a sliver in a web's corner fillet).
 
 use crate::section::{self, Shapes};
 use crate::{bbox_of, overlaps};
@@ -138,9 +138,9 @@ mod tests {
     }
 
     /// Remaining material and a piece from different overlays, their
-    /// shared edge differing in the last bits (as a crescent between a
-    /// claim's chord and a fillet's exact section and the claim's piece
-    /// came out): the join makes one shape of them, not two with a crack.
+    /// shared edge differing in the last bits (coordinates as a fillet's
+    /// sliver and its web layer came out of stage 6 on a generated frame):
+    /// the join makes one shape of them, not two with a crack.
     #[test]
     fn a_join_across_an_edge_that_differs_in_the_last_bits_is_one_shape() {
         let web = vec![vec![vec![
