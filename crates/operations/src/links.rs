@@ -705,14 +705,14 @@ fn stock_top(
                 .fold(f64::NEG_INFINITY, f64::max)
         });
     let mut pos = op.start;
-    let mut deepest_end = f64::NEG_INFINITY;
+    let mut highest_end = f64::NEG_INFINITY;
     for m in &op.moves {
         if m.feed > 0.0 && down(pos, m) {
-            deepest_end = deepest_end.max(view.z(m.to));
+            highest_end = highest_end.max(view.z(m.to));
         }
         pos = m.to;
     }
-    let top = feature_top.max(deepest_end + plunge_depth);
+    let top = feature_top.max(highest_end + plunge_depth);
     // No feature and no descent: every descent starts where it is.
     if top.is_finite() {
         top

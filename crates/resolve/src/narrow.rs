@@ -19,22 +19,16 @@ fn narrow(s: &Shapes, radius: f64) -> bool {
     section::offset(s, -radius).is_empty()
 }
 
-/// The piece among `taken` (those `eligible` admits) that `one` borders
-/// longest, measured as the area a thin band around it overlaps (a band as
-/// wide as a sliver is long); `None` when it borders none by more than a
-/// sliver.
-fn longest_border(
-    one: &Shapes,
-    taken: &[Taken],
-    sliver_area: f64,
-    eligible: impl Fn(usize) -> bool,
-) -> Option<usize> {
+/// The piece among `taken` that `one` borders longest, measured as the
+/// area a thin band around it overlaps (a band as wide as a sliver is
+/// long); `None` when it borders none by more than a sliver.
+fn longest_border(one: &Shapes, taken: &[Taken], sliver_area: f64) -> Option<usize> {
     let grown = section::offset(one, sliver_area.sqrt());
     let bb = bbox_of(&grown);
     taken
         .iter()
         .enumerate()
-        .filter(|(i, (_, tb, _))| eligible(*i) && overlaps(tb, &bb))
+        .filter(|(_, (_, tb, _))| overlaps(tb, &bb))
         .map(|(i, (_, _, t))| (i, section::area(&section::intersection(&grown, t))))
         .filter(|(_, a)| *a > sliver_area)
         .fold(None::<(usize, f64)>, |b, (i, a)| match b {
@@ -71,7 +65,7 @@ pub(crate) fn join_narrow(
             still.extend(one);
             continue;
         }
-        match longest_border(&one, taken, sliver_area, |_| true) {
+        match longest_border(&one, taken, sliver_area) {
             Some(i) => {
                 grow(&mut taken[i], &one);
                 grew.push((taken[i].0, section::area(&one)));
